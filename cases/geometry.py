@@ -1,0 +1,97 @@
+"""Boundary-node builders shared by the case modules.
+
+Every builder returns an ``(n, 2)`` float64 array of boundary nodes, the loop
+closed implicitly (the last node is *not* a repeat of the first).  The outer
+loop of a case is given counter-clockwise and holes clockwise, the orientation
+``bubblemesh.Domain`` uses; ``Domain.from_loops`` accepts either.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+__all__ = [
+    "circle",
+    "rectangle",
+    "polygon",
+    "resample_curve",
+    "ellipse_curve",
+    "signed_area",
+    "clockwise",
+    "counterclockwise",
+]
+
+
+def signed_area(loop: np.ndarray) -> float:
+    """Shoelace area: > 0 for a counter-clockwise loop."""
+    x, y = np.asarray(loop, dtype=float).T
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def counterclockwise(loop: np.ndarray) -> np.ndarray:
+    loop = np.asarray(loop, dtype=np.float64)
+    return loop if signed_area(loop) > 0 else loop[::-1].copy()
+
+
+def clockwise(loop: np.ndarray) -> np.ndarray:
+    loop = np.asarray(loop, dtype=np.float64)
+    return loop if signed_area(loop) < 0 else loop[::-1].copy()
+
+
+def circle(center: Sequence[float], radius: float, n: int) -> np.ndarray:
+    """``n`` nodes uniformly spaced on a circle, counter-clockwise from angle 0."""
+    t = 2.0 * np.pi * np.arange(n) / n
+    return np.column_stack([center[0] + radius * np.cos(t), center[1] + radius * np.sin(t)])
+
+
+def polygon(corners: Sequence[Sequence[float]], spacing: float) -> np.ndarray:
+    """Nodes along a closed polygon: every corner kept exactly, each side split
+    into ``max(1, round(length / spacing))`` equal segments."""
+    c = np.asarray(corners, dtype=np.float64)
+    out = []
+    for i in range(len(c)):
+        a, b = c[i], c[(i + 1) % len(c)]
+        n = max(1, int(round(float(np.hypot(*(b - a))) / spacing)))
+        s = np.arange(n)[:, None] / n
+        out.append(a + s * (b - a))
+    return np.vstack(out)
+
+
+def rectangle(x0: float, y0: float, x1: float, y1: float, spacing: float) -> np.ndarray:
+    """Counter-clockwise rectangle from its lower-left corner."""
+    return polygon([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], spacing)
+
+
+def resample_curve(
+    curve: Callable[[np.ndarray], np.ndarray], spacing: float, n_dense: int = 20000
+) -> np.ndarray:
+    """Nodes at (nearly) equal arc length on the closed curve ``curve(t)``,
+    ``t`` in [0, 2π).
+
+    The arc length s(t) is tabulated on ``n_dense`` parameter samples; the node
+    count is ``round(L / spacing)`` so the real spacing is ``L / n`` (within a
+    few percent of ``spacing``); each node's parameter is found by inverting the
+    table linearly and the node is evaluated *on the exact curve*.
+    """
+    t = np.linspace(0.0, 2.0 * np.pi, n_dense + 1)
+    p = np.asarray(curve(t), dtype=np.float64)
+    seg = np.hypot(*np.diff(p, axis=0).T)
+    s = np.concatenate([[0.0], np.cumsum(seg)])
+    n = max(3, int(round(s[-1] / spacing)))
+    ti = np.interp(np.arange(n) * (s[-1] / n), s, t)
+    return np.asarray(curve(ti), dtype=np.float64)
+
+
+def ellipse_curve(
+    center: Sequence[float], a: float, b: float, angle_deg: float = 0.0
+) -> Callable[[np.ndarray], np.ndarray]:
+    """Parametric ellipse with semi-axes ``a``, ``b`` rotated by ``angle_deg``."""
+    c, s = np.cos(np.radians(angle_deg)), np.sin(np.radians(angle_deg))
+
+    def f(t: np.ndarray) -> np.ndarray:
+        x, y = a * np.cos(t), b * np.sin(t)
+        return np.column_stack([center[0] + c * x - s * y, center[1] + s * x + c * y])
+
+    return f
