@@ -1,0 +1,379 @@
+"""Automatic Delaunay mesh generation: paper §2, steps (a)-(f) of §2.4.
+
+(a) constrained Delaunay triangulation of the refined boundary (§2.1);
+(b) node bubbles on the boundary (eq. 1-2), element bubbles at the centroids
+    (eq. 3-4) and bubble densities D_e = A_e / A_m (eq. 5);
+(c) take the triangle of smallest density from a priority queue (a binary heap
+    of (D_e, triangle id) with lazy invalidation: a triangle slot that is
+    re-used gets a new version, its old heap entries are skipped when popped;
+    ties are broken by the smaller triangle id, so the run is deterministic);
+(d) create a node at its centroid, with the element bubble's radius r_e;
+(e) insert it by Bowyer-Watson (§2.2): the cavity grows from that triangle
+    through neighbours whose circumcircle contains the node, never across the
+    boundary; the new triangles get their bubbles and enter the queue;
+(f) stop the first time the total element-bubble area reaches the domain area,
+    sum A_e >= A_geo (eq. 6); sum A_e is kept incrementally with an error-free
+    (two-sum) accumulator.
+
+A bound that always holds: every r_e interpolates radii that are >= the
+smallest boundary radius r_min, each insertion adds two triangles, so eq. 6
+holds after at most A_geo / (2 pi r_min^2) + 1 insertions.  Going past that
+bound raises MeshingError instead of looping.
+"""
+
+import math
+import time
+
+import numpy as np
+from numba import njit
+
+from .bubbles import boundary_radii, element_radius, triangle_area
+from .errors import MeshingError
+from .mesh import Mesh
+from .predicates import orient2d
+from .triangulation import OK, _MESSAGES, constrained_delaunay, fill_cavity, find_cavity
+
+# kernel status codes (beyond the triangulation's)
+STOP_POPULATION = 1  # eq. 6 reached
+STOP_MAX_INSERTIONS = 2  # the caller's max_insertions reached
+NEED_CAPACITY = 3  # arrays full: the caller grows them and resumes
+CHUNK_DONE = 4  # a progress chunk is done: the caller reports and resumes
+ERR_EMPTY_QUEUE = -20
+
+# integer state slots
+S_NPTS, S_NTRI, S_HEAP, S_INSERTIONS, S_STAMP = range(5)
+
+
+# --- binary heap on parallel arrays, ordered by (key, id) ----------------------------
+
+
+@njit(cache=True, inline="always")
+def _less(hkey, hid, i, j):
+    return hkey[i] < hkey[j] or (hkey[i] == hkey[j] and hid[i] < hid[j])
+
+
+@njit(cache=True, inline="always")
+def _swap(hkey, hid, hver, i, j):
+    hkey[i], hkey[j] = hkey[j], hkey[i]
+    hid[i], hid[j] = hid[j], hid[i]
+    hver[i], hver[j] = hver[j], hver[i]
+
+
+@njit(cache=True)
+def heap_push(hkey, hid, hver, size, key, ident, version):
+    i = size
+    hkey[i] = key
+    hid[i] = ident
+    hver[i] = version
+    while i > 0:
+        parent = (i - 1) // 2
+        if not _less(hkey, hid, i, parent):
+            break
+        _swap(hkey, hid, hver, i, parent)
+        i = parent
+    return size + 1
+
+
+@njit(cache=True)
+def heap_pop(hkey, hid, hver, size):
+    """Move the smallest entry to slot ``size - 1`` and restore the heap."""
+    size -= 1
+    _swap(hkey, hid, hver, 0, size)
+    i = 0
+    while True:
+        left = 2 * i + 1
+        if left >= size:
+            break
+        child = left
+        if left + 1 < size and _less(hkey, hid, left + 1, left):
+            child = left + 1
+        if not _less(hkey, hid, child, i):
+            break
+        _swap(hkey, hid, hver, i, child)
+        i = child
+    return size
+
+
+# --- the §2 kernel -------------------------------------------------------------------
+
+
+@njit(cache=True)
+def _bubble(P, R, tri, t, r_e, a_e):
+    """Eq. 3-5 for triangle t: stores r_e, A_e and returns D_e."""
+    a = tri[t, 0]
+    b = tri[t, 1]
+    c = tri[t, 2]
+    r, _, _ = element_radius(
+        P[a, 0], P[a, 1], R[a], P[b, 0], P[b, 1], R[b], P[c, 0], P[c, 1], R[c]
+    )
+    r_e[t] = r
+    a_e[t] = math.pi * r * r
+    return a_e[t] / triangle_area(P[a, 0], P[a, 1], P[b, 0], P[b, 1], P[c, 0], P[c, 1])
+
+
+@njit(cache=True, inline="always")
+def _accumulate(acc, x):
+    """acc[0] + acc[1] += x without rounding loss (two-sum)."""
+    s = acc[0] + x
+    bv = s - acc[0]
+    acc[1] += (acc[0] - (s - bv)) + (x - bv)
+    acc[0] = s
+
+
+@njit(cache=True)
+def init_queue(P, R, tri, ntri, r_e, a_e, version, hkey, hid, hver, acc):
+    """Step (b): bubbles of the initial triangles, their sum, the queue."""
+    size = 0
+    for t in range(ntri):
+        d = _bubble(P, R, tri, t, r_e, a_e)
+        _accumulate(acc, a_e[t])
+        size = heap_push(hkey, hid, hver, size, d, t, version[t])
+    return size
+
+
+@njit(cache=True)
+def _rebuild_queue(P, R, tri, ntri, r_e, a_e, version, hkey, hid, hver, dead):
+    """Drop stale heap entries: push every live, splittable triangle afresh."""
+    size = 0
+    for t in range(ntri):
+        if dead[t]:
+            continue
+        a = tri[t, 0]
+        b = tri[t, 1]
+        c = tri[t, 2]
+        area = triangle_area(P[a, 0], P[a, 1], P[b, 0], P[b, 1], P[c, 0], P[c, 1])
+        size = heap_push(hkey, hid, hver, size, a_e[t] / area, t, version[t])
+    return size
+
+
+@njit(cache=True)
+def insertion_loop(
+    P, R, tri, nbr, con, vt, r_e, a_e, version, dead, hkey, hid, hver,
+    state, acc, area_geo, max_insertions, chunk,
+    mark, cav, bnd, newt, vstart,
+):
+    """Steps (c)-(f) until eq. 6, ``max_insertions``, a full array or ``chunk``
+    insertions.  All state lives in the arrays, so the caller can grow them and
+    call again.  Returns a status code."""
+    npts = state[S_NPTS]
+    ntri = state[S_NTRI]
+    size = state[S_HEAP]
+    done = 0
+    status = OK
+    while True:
+        if acc[0] + acc[1] >= area_geo:
+            status = STOP_POPULATION
+            break
+        if state[S_INSERTIONS] >= max_insertions:
+            status = STOP_MAX_INSERTIONS
+            break
+        if done >= chunk:
+            status = CHUNK_DONE
+            break
+        if npts >= P.shape[0] or ntri + 2 > tri.shape[0]:
+            status = NEED_CAPACITY
+            break
+        if size + ntri + 2 > hkey.shape[0]:
+            size = _rebuild_queue(P, R, tri, ntri, r_e, a_e, version, hkey, hid, hver, dead)
+            if size + ntri + 2 > hkey.shape[0]:
+                status = NEED_CAPACITY
+                break
+        # (c) the live triangle of smallest density
+        t = -1
+        while size > 0:
+            size = heap_pop(hkey, hid, hver, size)
+            if hver[size] == version[hid[size]] and not dead[hid[size]]:
+                t = hid[size]
+                break
+        if t < 0:
+            status = ERR_EMPTY_QUEUE
+            break
+        # (d) its centroid, which must be strictly inside it in exact arithmetic
+        a = tri[t, 0]
+        b = tri[t, 1]
+        c = tri[t, 2]
+        ex = (P[a, 0] + P[b, 0] + P[c, 0]) / 3.0
+        ey = (P[a, 1] + P[b, 1] + P[c, 1]) / 3.0
+        if (
+            orient2d(P[a, 0], P[a, 1], P[b, 0], P[b, 1], ex, ey) <= 0.0
+            or orient2d(P[b, 0], P[b, 1], P[c, 0], P[c, 1], ex, ey) <= 0.0
+            or orient2d(P[c, 0], P[c, 1], P[a, 0], P[a, 1], ex, ey) <= 0.0
+        ):
+            dead[t] = True  # too thin to split in floating point: leave it
+            continue
+        # (e) Bowyer-Watson insertion from t
+        state[S_STAMP] += 1
+        ncav, nb = find_cavity(P, ex, ey, t, tri, nbr, con, mark, state[S_STAMP], cav, bnd)
+        if ntri + nb - ncav > tri.shape[0] or size + nb > hkey.shape[0]:
+            d = _bubble(P, R, tri, t, r_e, a_e)  # put t back: it is retried first
+            size = heap_push(hkey, hid, hver, size, d, t, version[t])
+            status = NEED_CAPACITY
+            break
+        P[npts, 0] = ex
+        P[npts, 1] = ey
+        R[npts] = r_e[t]
+        for k in range(ncav):
+            _accumulate(acc, -a_e[cav[k]])
+        status, ntri_new = fill_cavity(P, npts, tri, nbr, con, vt, ntri, cav, ncav, bnd, nb, vstart, newt)
+        if status != OK:
+            break
+        ntri = ntri_new
+        npts += 1
+        for k in range(nb):
+            s = newt[k]
+            version[s] += 1
+            dead[s] = False
+            d = _bubble(P, R, tri, s, r_e, a_e)
+            _accumulate(acc, a_e[s])
+            size = heap_push(hkey, hid, hver, size, d, s, version[s])
+        state[S_INSERTIONS] += 1
+        done += 1
+    state[S_NPTS] = npts
+    state[S_NTRI] = ntri
+    state[S_HEAP] = size
+    return status
+
+
+# --- Python driver -------------------------------------------------------------------
+
+
+class _Workspace:
+    """The growable arrays of one generation run (capacity doubles on demand)."""
+
+    def __init__(self, points, radii, tri, nbr, n_cap, t_cap):
+        n0, m0 = len(points), len(tri)
+        self.P = np.zeros((n_cap, 2))
+        self.P[:n0] = points
+        self.R = np.zeros(n_cap)
+        self.R[:n0] = radii
+        self.vt = np.full(n_cap, -1, np.int64)
+        self.tri = np.zeros((t_cap, 3), np.int64)
+        self.tri[:m0] = tri
+        self.nbr = np.full((t_cap, 3), -1, np.int64)
+        self.nbr[:m0] = nbr
+        self.con = np.zeros((t_cap, 3), np.uint8)
+        self.r_e = np.zeros(t_cap)
+        self.a_e = np.zeros(t_cap)
+        self.version = np.zeros(t_cap, np.int64)
+        self.dead = np.zeros(t_cap, np.bool_)
+        self._heap(2 * t_cap)
+        self._scratch()
+
+    def _heap(self, h_cap):
+        self.hkey = np.zeros(h_cap)
+        self.hid = np.zeros(h_cap, np.int64)
+        self.hver = np.zeros(h_cap, np.int64)
+
+    def _scratch(self):
+        t_cap = len(self.tri)
+        self.mark = np.zeros(t_cap, np.int64)
+        self.cav = np.zeros(t_cap, np.int64)
+        self.bnd = np.zeros((t_cap + 2, 4), np.int64)
+        self.newt = np.zeros(t_cap + 2, np.int64)
+        self.vstart = np.full(len(self.P) + 1, -1, np.int64)
+
+    def grow(self, size):
+        """Double every capacity, keeping contents (heap entries included)."""
+        for name in ("P", "R", "vt", "tri", "nbr", "con", "r_e", "a_e", "version", "dead",
+                     "hkey", "hid", "hver"):
+            old = getattr(self, name)
+            new = np.zeros((2 * old.shape[0],) + old.shape[1:], old.dtype)
+            new[: old.shape[0]] = old
+            if name in ("vt", "nbr"):
+                new[old.shape[0]:] = -1
+            setattr(self, name, new)
+        self._scratch()
+        self.mark[:] = 0
+
+    def kernel_args(self):
+        return (self.P, self.R, self.tri, self.nbr, self.con, self.vt, self.r_e, self.a_e,
+                self.version, self.dead, self.hkey, self.hid, self.hver)
+
+
+def _insertion_bound(domain_area, radii):
+    """The a-priori bound on insertions (module docstring)."""
+    r_min = float(radii.min())
+    return int(math.ceil(domain_area / (2.0 * math.pi * r_min * r_min))) + 1
+
+
+def generate(domain, *, max_insertions=None, progress=False):
+    """Paper §2: the Delaunay mesh of ``domain`` with bubble-controlled node
+    insertion, stopped by eq. 6.
+
+    ``max_insertions`` stops earlier (after at most that many insertions), so the
+    population criterion can be checked from outside.  ``progress`` shows a tqdm
+    bar.  Returns a :class:`Mesh` whose ``stats`` hold ``insertions``,
+    ``bubble_area`` (sum A_e), ``domain_area`` (A_geo) and ``stop`` ("population"
+    or "max_insertions")."""
+    start = time.perf_counter()
+    points = np.asarray(domain.points, dtype=np.float64)
+    tri, nbr = constrained_delaunay(points, domain.segments)  # (a)
+    radii = boundary_radii(points, domain.loops)  # (b) eq. 1-2
+    area_geo = float(domain.area)
+    bound = _insertion_bound(area_geo, radii)
+    limit = bound if max_insertions is None else min(int(max_insertions), bound)
+    expected = int(area_geo / float(np.mean(math.pi * radii**2))) + len(tri)
+    t_cap = max(64, int(1.1 * expected) + 2 * len(tri))
+    ws = _Workspace(points, radii, tri, nbr, len(points) + t_cap // 2 + 16, t_cap)
+    acc = np.zeros(2)
+    state = np.zeros(5, np.int64)
+    state[S_NPTS] = len(points)
+    state[S_NTRI] = len(tri)
+    state[S_HEAP] = init_queue(ws.P, ws.R, ws.tri, len(tri), ws.r_e, ws.a_e, ws.version,
+                               ws.hkey, ws.hid, ws.hver, acc)
+    bar = _progress_bar(progress, expected // 2)
+    try:
+        status = _run(ws, state, acc, area_geo, limit, bar)
+    finally:
+        if bar is not None:
+            bar.close()
+    if status == STOP_MAX_INSERTIONS and (max_insertions is None or limit < max_insertions):
+        raise MeshingError(f"generation reached its insertion bound {bound} without eq. 6")
+    return _as_mesh(domain, ws, state, acc, radii, status, time.perf_counter() - start)
+
+
+def _run(ws, state, acc, area_geo, limit, bar):
+    chunk = 20000 if bar is not None else 1 << 62
+    while True:
+        before = int(state[S_INSERTIONS])
+        status = insertion_loop(*ws.kernel_args(), state, acc, area_geo, limit, chunk,
+                                ws.mark, ws.cav, ws.bnd, ws.newt, ws.vstart)
+        if bar is not None:
+            bar.update(int(state[S_INSERTIONS]) - before)
+        if status == NEED_CAPACITY:
+            ws.grow(state[S_HEAP])
+        elif status == CHUNK_DONE:
+            continue
+        elif status < 0:
+            raise MeshingError(f"generation: {_MESSAGES.get(status, status)}")
+        else:
+            return status
+
+
+def _progress_bar(progress, total):
+    if not progress:
+        return None
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, desc="generate (§2)", unit="node")
+
+
+def _as_mesh(domain, ws, state, acc, boundary, status, seconds):
+    npts, ntri = int(state[S_NPTS]), int(state[S_NTRI])
+    stats = {
+        "insertions": int(state[S_INSERTIONS]),
+        "bubble_area": float(acc[0] + acc[1]),
+        "domain_area": float(domain.area),
+        "stop": "population" if status == STOP_POPULATION else "max_insertions",
+        "seconds": seconds,
+    }
+    return Mesh(
+        points=ws.P[:npts].copy(),
+        triangles=ws.tri[:ntri].copy(),
+        neighbors=ws.nbr[:ntri].copy(),
+        radii=ws.R[:npts].copy(),
+        segments=np.asarray(domain.segments, dtype=np.int64),
+        n_boundary=len(boundary),
+        domain=domain,
+        stats=stats,
+    )

@@ -1,0 +1,55 @@
+"""Element quality: the radius ratio of paper §4, eq. 10, and angles.
+
+rho = 2 r / R = (b + c - a)(c + a - b)(a + b - c) / (a b c), with a, b, c the
+side lengths, r the inradius and R the circumradius: 1 for an equilateral
+triangle, tending to 0 as the triangle degenerates.
+"""
+
+import numpy as np
+
+
+def _side_lengths(points, triangles):
+    p = np.asarray(points, dtype=np.float64)[np.asarray(triangles)]
+    a = np.linalg.norm(p[:, 2] - p[:, 1], axis=1)  # opposite vertex 0
+    b = np.linalg.norm(p[:, 0] - p[:, 2], axis=1)  # opposite vertex 1
+    c = np.linalg.norm(p[:, 1] - p[:, 0], axis=1)  # opposite vertex 2
+    return a, b, c
+
+
+def radius_ratio(points, triangles):
+    """Eq. 10 for every triangle, (M,) float64 in [0, 1]."""
+    a, b, c = _side_lengths(points, triangles)
+    rho = (b + c - a) * (c + a - b) * (a + b - c) / (a * b * c)
+    return np.clip(rho, 0.0, 1.0)
+
+
+def angles(points, triangles):
+    """Interior angles in degrees, (M, 3): column i is the angle at vertex i."""
+    a, b, c = _side_lengths(points, triangles)
+    sides = np.stack([a, b, c], axis=1)
+    out = np.empty_like(sides)
+    for i in range(3):
+        opp = sides[:, i]
+        s1 = sides[:, (i + 1) % 3]
+        s2 = sides[:, (i + 2) % 3]
+        cos = np.clip((s1**2 + s2**2 - opp**2) / (2 * s1 * s2), -1.0, 1.0)
+        out[:, i] = np.degrees(np.arccos(cos))
+    return out
+
+
+def summary(points, triangles):
+    """Radius-ratio and angle statistics as a flat dict (one pandas row)."""
+    rho = radius_ratio(points, triangles)
+    ang = angles(points, triangles)
+    return {
+        "count": int(rho.size),
+        "min": float(rho.min()),
+        "mean": float(rho.mean()),
+        "median": float(np.median(rho)),
+        "count_below_0_5": int((rho < 0.5).sum()),
+        "frac_below_0_5": float((rho < 0.5).mean()),
+        "count_below_0_7": int((rho < 0.7).sum()),
+        "frac_below_0_7": float((rho < 0.7).mean()),
+        "min_angle_deg": float(ang.min()),
+        "max_angle_deg": float(ang.max()),
+    }
