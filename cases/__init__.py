@@ -14,7 +14,16 @@ from types import ModuleType
 
 # Infrastructure modules of this package: never cases, and not imported here
 # (some of them pull in matplotlib, gmsh, pymeshlab ...).
-_NOT_CASES = {"geometry", "peers", "metrics", "plots", "report", "reproduce", "benchmark", "__main__"}
+_NOT_CASES = {
+    "geometry",
+    "peers",
+    "metrics",
+    "plots",
+    "report",
+    "reproduce",
+    "benchmark",
+    "__main__",
+}
 
 
 def _discover() -> dict[str, ModuleType]:

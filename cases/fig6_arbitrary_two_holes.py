@@ -5,7 +5,10 @@ import numpy as np
 from cases.geometry import clockwise, ellipse_curve, polygon, resample_curve
 
 NAME = "fig6_arbitrary_two_holes"
-TITLE = "Fig. 6: arbitrary region (spacing 0.07) with an elliptical (0.03) and a triangular (0.035) hole"
+TITLE = (
+    "Fig. 6: arbitrary region (spacing 0.07) with an elliptical (0.03) "
+    "and a triangular (0.035) hole"
+)
 
 
 def outer(t):

@@ -11,7 +11,14 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["radius_ratio", "angles", "summary", "boundary_edges", "boundary_nodes", "boundary_shift"]
+__all__ = [
+    "radius_ratio",
+    "angles",
+    "summary",
+    "boundary_edges",
+    "boundary_nodes",
+    "boundary_shift",
+]
 
 
 def _sides(points: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -50,8 +57,18 @@ def summary(points: np.ndarray, triangles: np.ndarray) -> dict:
     n = len(rho)
     if n == 0:
         nan = float("nan")
-        return dict(count=0, min=nan, mean=nan, median=nan, frac_below_0_5=nan, frac_below_0_7=nan,
-                    count_below_0_5=0, count_below_0_7=0, min_angle_deg=nan, max_angle_deg=nan)
+        return dict(
+            count=0,
+            min=nan,
+            mean=nan,
+            median=nan,
+            frac_below_0_5=nan,
+            frac_below_0_7=nan,
+            count_below_0_5=0,
+            count_below_0_7=0,
+            min_angle_deg=nan,
+            max_angle_deg=nan,
+        )
     return dict(
         count=n,
         min=float(rho.min()),
@@ -78,7 +95,9 @@ def boundary_nodes(triangles: np.ndarray) -> np.ndarray:
     return np.unique(boundary_edges(triangles))
 
 
-def boundary_shift(boundary: np.ndarray, points: np.ndarray, triangles: np.ndarray) -> tuple[float, int]:
+def boundary_shift(
+    boundary: np.ndarray, points: np.ndarray, triangles: np.ndarray
+) -> tuple[float, int]:
     """How far the given boundary nodes moved in a mesh, and how many boundary nodes it has.
 
     Returns ``(shift, n_boundary)``: ``shift`` is the largest distance from a

@@ -34,17 +34,22 @@ How each peer is tuned to the same boundary and element count:
   segments.  Gmsh's own ``Mesh.MeshSizeFactor`` and boundary extension do not
   reach the interior once the boundary is transfinite (measured: the count did
   not change with the factor), so the interior size comes from a size
-  callback: f × the reciprocal-distance mean of h_i over the 8 nearest boundary
-  nodes (the paper's eq. 3 weighting), with ``f *= sqrt(count / target)``
-  corrected over the tuning runs.  One thread, no terminal output, initialised
-  and finalised around each call.
+  callback: f × the reciprocal-distance mean, over the loops, of h at each
+  loop's nearest node (the paper's eq. 3 weighting, one term per loop so a
+  densely noded hole does not outweigh the outer loop), with
+  ``f *= sqrt(count / target)`` corrected over the tuning runs.  One thread,
+  no terminal output, initialised and finalised around each call.
 * ``pymeshlab_remesh``: ``meshing_isotropic_explicit_remeshing`` of the §2 mesh
   with an absolute target edge length ``L`` (start: the equilateral edge for
   domain area / target; corrected ``L *= sqrt(count / target)``).  The filter
-  has no boundary-lock switch: it keeps the boundary vertices unless boundary
-  edges are shorter than its collapse length, so the faces owning a boundary
-  edge are left unselected and the filter runs with ``selectedonly=True``;
-  ``boundary_shift`` measures the result.
+  has no boundary-lock switch, and on the whole mesh it splits and collapses
+  boundary edges like any other (measured: the boundary-node count changes).
+  So the faces owning a boundary edge are left unselected and the filter runs
+  with ``selectedonly=True``: the boundary nodes, and that strip of §2 faces,
+  are kept exactly.
+* ``pymeshlab_remesh_free``: the same on the whole mesh, boundary not kept
+  (``boundary_shift`` and ``boundary_nodes`` say how far it changed): what the
+  filter does when left alone, for reference.
 * ``laplacian_pymeshlab``: ``apply_coord_laplacian_smoothing`` with
   ``cotangentweight=False`` for ``LAPLACIAN_STEPS`` steps, only the interior
   vertices selected (``selected=True``) so the boundary stays fixed (the
@@ -66,11 +71,24 @@ import numpy as np
 
 from cases import metrics
 
-__all__ = ["PEERS", "GENERATORS", "POSTPROCESSORS", "LAPLACIAN_STEPS", "run_peer", "laplacian_smooth",
-           "hole_points", "peer_versions"]
+__all__ = [
+    "PEERS",
+    "GENERATORS",
+    "POSTPROCESSORS",
+    "LAPLACIAN_STEPS",
+    "run_peer",
+    "laplacian_smooth",
+    "hole_points",
+    "peer_versions",
+]
 
 GENERATORS = ("triangle", "gmsh_frontal", "gmsh_delaunay")
-POSTPROCESSORS = ("pymeshlab_remesh", "laplacian_pymeshlab", "laplacian_uniform")
+POSTPROCESSORS = (
+    "pymeshlab_remesh",
+    "pymeshlab_remesh_free",
+    "laplacian_pymeshlab",
+    "laplacian_uniform",
+)
 PEERS = GENERATORS + POSTPROCESSORS
 
 #: Laplacian smoothing steps for both Laplacian peers.
@@ -85,11 +103,12 @@ REMESH_ITERATIONS = 10
 
 # --------------------------------------------------------------------------- helpers
 
+
 def _segments(loops: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    pts = np.vstack([np.asarray(l, dtype=np.float64)[:, :2] for l in loops])
+    pts = np.vstack([np.asarray(lp, dtype=np.float64)[:, :2] for lp in loops])
     segs, off = [], 0
-    for l in loops:
-        n = len(l)
+    for lp in loops:
+        n = len(lp)
         i = np.arange(n)
         segs.append(np.column_stack([off + i, off + (i + 1) % n]))
         off += n
@@ -100,14 +119,14 @@ def hole_points(loops: Sequence[np.ndarray]) -> np.ndarray:
     """A point strictly inside each hole loop (shapely's representative point)."""
     from shapely.geometry import Polygon
 
-    out = [Polygon(np.asarray(l)[:, :2]).representative_point().coords[0] for l in loops[1:]]
+    out = [Polygon(np.asarray(lp)[:, :2]).representative_point().coords[0] for lp in loops[1:]]
     return np.asarray(out, dtype=np.float64).reshape(-1, 2)
 
 
 def _domain_area(loops: Sequence[np.ndarray]) -> float:
     from cases.geometry import signed_area
 
-    return abs(signed_area(loops[0])) - sum(abs(signed_area(l)) for l in loops[1:])
+    return abs(signed_area(loops[0])) - sum(abs(signed_area(lp)) for lp in loops[1:])
 
 
 def _ccw(points: np.ndarray, tri: np.ndarray) -> np.ndarray:
@@ -137,6 +156,7 @@ def _closest(runs: list[tuple], target: int):
 
 # --------------------------------------------------------------------------- Triangle
 
+
 def _triangle(loops, target):
     import triangle as tr
 
@@ -158,14 +178,21 @@ def _triangle(loops, target):
             break
         area *= len(t) / target
     opts, _, p, t, sec = runs[-1] if len(runs) == 1 else _closest(runs, target)
-    return p, _ccw(p, t), sec, {
-        "options": f"triangle.triangulate(..., '{opts}') (p: PSLG, q{TRIANGLE_MIN_ANGLE}: min angle, "
-                   f"a: max area, Y: no boundary Steiner points, Q: quiet)",
-        "runs": [(r[0], int(r[1])) for r in runs],
-    }
+    return (
+        p,
+        _ccw(p, t),
+        sec,
+        {
+            "options": f"triangle.triangulate(..., '{opts}') (p: PSLG, q{TRIANGLE_MIN_ANGLE}: min "
+            "angle, "
+            f"a: max area, Y: no boundary Steiner points, Q: quiet)",
+            "runs": [(r[0], int(r[1])) for r in runs],
+        },
+    )
 
 
 # --------------------------------------------------------------------------- Gmsh
+
 
 def _node_sizes(loop: np.ndarray) -> np.ndarray:
     """Mean length of the two boundary segments at each node of a closed loop."""
@@ -178,9 +205,9 @@ def _gmsh(loops, target, algorithm, uniform=False):
     import gmsh
     from scipy.spatial import cKDTree
 
-    sizes = np.concatenate([_node_sizes(l) for l in loops])
-    tree = cKDTree(np.vstack(loops))
-    k = min(8, len(sizes))
+    loop_sizes = [_node_sizes(lp) for lp in loops]
+    sizes = np.concatenate(loop_sizes)
+    trees = [cKDTree(lp) for lp in loops]
 
     if gmsh.isInitialized():
         gmsh.finalize()
@@ -200,7 +227,10 @@ def _gmsh(loops, target, algorithm, uniform=False):
             curve_loops, off = [], 0
             for loop in loops:
                 n = len(loop)
-                ptags = [gmsh.model.geo.addPoint(x, y, 0.0, h) for (x, y), h in zip(loop, sizes[off:off + n])]
+                ptags = [
+                    gmsh.model.geo.addPoint(x, y, 0.0, h)
+                    for (x, y), h in zip(loop, sizes[off : off + n], strict=True)
+                ]
                 off += n
                 ltags = [gmsh.model.geo.addLine(ptags[i], ptags[(i + 1) % n]) for i in range(n)]
                 for lt in ltags:  # exactly the given boundary nodes: no node added on a segment
@@ -213,10 +243,16 @@ def _gmsh(loops, target, algorithm, uniform=False):
                 gmsh.option.setNumber("Mesh.MeshSizeMin", h)
                 gmsh.option.setNumber("Mesh.MeshSizeMax", h)
             else:
+
                 def size_at(dim, tag, x, y, z, lc, f=factor):
-                    d, i = tree.query((x, y), k=k)
-                    w = 1.0 / np.maximum(np.atleast_1d(d), 1e-300)
-                    return float(f * (w @ sizes[np.atleast_1d(i)]) / w.sum())
+                    num = den = 0.0
+                    for tree, h in zip(trees, loop_sizes, strict=True):
+                        d, i = tree.query((x, y))
+                        if d < 1e-300:
+                            return float(f * h[i])
+                        num += h[i] / d
+                        den += 1.0 / d
+                    return float(f * num / den)
 
                 gmsh.model.mesh.setSizeCallback(size_at)
             gmsh.model.mesh.generate(2)
@@ -235,18 +271,28 @@ def _gmsh(loops, target, algorithm, uniform=False):
         gmsh.finalize()
     factor, _, p, t, sec = _closest(runs, target)
     name = {6: "Frontal-Delaunay", 5: "Delaunay"}[algorithm]
-    field = (f"uniform size {factor:.4g} x mean boundary spacing" if uniform else
-             f"size at x = {factor:.4g} x reciprocal-distance mean of the sizes of the {k} nearest boundary "
-             f"nodes (Python size callback, included in the time)")
-    return p, _ccw(p, t), sec, {
-        "options": f"gmsh {gmsh.__version__} Mesh.Algorithm={algorithm} ({name}), boundary segments "
-                   f"transfinite with 2 nodes, node size = mean adjacent segment length, "
-                   f"MeshSizeExtendFromBoundary=0, {field}",
-        "runs": [(round(float(r[0]), 6), r[1]) for r in runs],
-    }
+    field = (
+        f"uniform size {factor:.4g} x mean boundary spacing"
+        if uniform
+        else f"size at x = {factor:.4g} x reciprocal-distance mean over the loops of the "
+        "size of each loop's nearest node (Python size callback, included in the time)"
+    )
+    return (
+        p,
+        _ccw(p, t),
+        sec,
+        {
+            "options": f"gmsh {gmsh.__version__} Mesh.Algorithm={algorithm} ({name}), boundary "
+            "segments "
+            f"transfinite with 2 nodes, node size = mean adjacent segment length, "
+            f"MeshSizeExtendFromBoundary=0, {field}",
+            "runs": [(round(float(r[0]), 6), r[1]) for r in runs],
+        },
+    )
 
 
 # --------------------------------------------------------------------------- pymeshlab
+
 
 def _meshset(points, triangles):
     import pymeshlab as pml
@@ -258,34 +304,56 @@ def _meshset(points, triangles):
     return ms
 
 
-def _pymeshlab_remesh(loops, target, base):
+def _remesh_once(bp, bt, length, lock_strip):
     import pymeshlab as pml
 
-    bp, bt = np.asarray(base[0], np.float64), np.asarray(base[1], np.int64)
-    length = np.sqrt(4.0 * _domain_area(loops) / (np.sqrt(3.0) * target))
-    runs = []
-    for _ in range(TUNING_RUNS):
-        ms = _meshset(bp, bt)
-        t0 = time.perf_counter()
+    ms = _meshset(bp, bt)
+    t0 = time.perf_counter()
+    if lock_strip:
         ms.compute_selection_from_mesh_border()  # faces owning a boundary edge, boundary vertices
         ms.apply_selection_inverse(invfaces=True, invverts=True)
-        ms.meshing_isotropic_explicit_remeshing(
-            iterations=REMESH_ITERATIONS, targetlen=pml.PureValue(float(length)), selectedonly=True)
-        m = ms.current_mesh()
-        sec = time.perf_counter() - t0
-        p = np.array(m.vertex_matrix(), dtype=np.float64)[:, :2]
-        t = np.array(m.face_matrix(), dtype=np.int64)
+    ms.meshing_isotropic_explicit_remeshing(
+        iterations=REMESH_ITERATIONS,
+        targetlen=pml.PureValue(float(length)),
+        selectedonly=lock_strip,
+    )
+    m = ms.current_mesh()
+    sec = time.perf_counter() - t0
+    return (
+        np.array(m.vertex_matrix(), dtype=np.float64)[:, :2],
+        np.array(m.face_matrix(), dtype=np.int64),
+        sec,
+    )
+
+
+def _pymeshlab_remesh(loops, target, base, lock):
+    bp, bt = np.asarray(base[0], np.float64), np.asarray(base[1], np.int64)
+    length, runs = np.sqrt(4.0 * _domain_area(loops) / (np.sqrt(3.0) * target)), []
+    for _ in range(TUNING_RUNS):
+        p, t, sec = _remesh_once(bp, bt, length, lock)
         runs.append((length, len(t), p, t, sec))
         if len(t) == target:
             break
         length *= np.sqrt(len(t) / target)
     length, _, p, t, sec = _closest(runs, target)
-    return p, _ccw(p, t), sec, {
-        "options": f"meshing_isotropic_explicit_remeshing(iterations={REMESH_ITERATIONS}, "
-                   f"targetlen=PureValue({length:.4g}), selectedonly=True) on the faces that own no "
-                   f"boundary edge (compute_selection_from_mesh_border + apply_selection_inverse)",
-        "runs": [(round(float(r[0]), 6), r[1]) for r in runs],
-    }
+    how = (
+        "with selectedonly=True on the faces that own no boundary edge "
+        "(compute_selection_from_mesh_border "
+        "+ apply_selection_inverse): boundary nodes and the boundary strip of faces kept"
+        if lock
+        else "on the whole mesh: boundary edges may be split or collapsed "
+        "(see boundary shift / boundary nodes)"
+    )
+    return (
+        p,
+        _ccw(p, t),
+        sec,
+        {
+            "options": f"meshing_isotropic_explicit_remeshing(iterations={REMESH_ITERATIONS}, "
+            f"targetlen=PureValue({length:.4g})) {how}",
+            "runs": [(round(float(r[0]), 6), int(r[1])) for r in runs],
+        },
+    )
 
 
 def _laplacian_pymeshlab(base, n_boundary, steps):
@@ -294,17 +362,30 @@ def _laplacian_pymeshlab(base, n_boundary, steps):
     t0 = time.perf_counter()
     ms.compute_selection_from_mesh_border()
     ms.apply_selection_inverse(invfaces=False, invverts=True)  # interior vertices only
-    ms.apply_coord_laplacian_smoothing(stepsmoothnum=steps, boundary=False, cotangentweight=False, selected=True)
+    ms.apply_coord_laplacian_smoothing(
+        stepsmoothnum=steps, boundary=False, cotangentweight=False, selected=True
+    )
     p = np.array(ms.current_mesh().vertex_matrix(), dtype=np.float64)[:, :2]
     sec = time.perf_counter() - t0
-    return p, bt.copy(), sec, {
-        "options": f"apply_coord_laplacian_smoothing(stepsmoothnum={steps}, cotangentweight=False, "
-                   f"selected=True) with only interior vertices selected",
-    }
+    return (
+        p,
+        bt.copy(),
+        sec,
+        {
+            "options": f"apply_coord_laplacian_smoothing(stepsmoothnum={steps}, "
+            "cotangentweight=False, "
+            f"selected=True) with only interior vertices selected",
+        },
+    )
 
 
-def laplacian_smooth(points: np.ndarray, triangles: np.ndarray, fixed: np.ndarray, steps: int,
-                     self_weight: float = 0.0) -> np.ndarray:
+def laplacian_smooth(
+    points: np.ndarray,
+    triangles: np.ndarray,
+    fixed: np.ndarray,
+    steps: int,
+    self_weight: float = 0.0,
+) -> np.ndarray:
     """Jacobi uniform Laplacian smoothing, ``fixed`` (bool mask or indices) never moved.
 
     Each step moves every free node to (self_weight·x + Σ neighbours) /
@@ -317,8 +398,9 @@ def laplacian_smooth(points: np.ndarray, triangles: np.ndarray, fixed: np.ndarra
     t = np.asarray(triangles, dtype=np.int64)
     n = len(p)
     e = np.unique(np.sort(np.vstack([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1), axis=0)
-    adj = sp.coo_matrix((np.ones(2 * len(e)), (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
-                        shape=(n, n)).tocsr()
+    adj = sp.coo_matrix(
+        (np.ones(2 * len(e)), (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])), shape=(n, n)
+    ).tocsr()
     deg = np.asarray(adj.sum(axis=1)).ravel()
     mask = np.zeros(n, dtype=bool)
     mask[fixed] = True
@@ -335,19 +417,38 @@ def _laplacian_uniform(base, n_boundary, steps):
     t0 = time.perf_counter()
     p = laplacian_smooth(bp, bt, np.arange(n_boundary), steps)
     sec = time.perf_counter() - t0
-    return p, bt.copy(), sec, {
-        "options": f"cases.peers.laplacian_smooth(steps={steps}): x <- mean of neighbours, boundary fixed",
-    }
+    return (
+        p,
+        bt.copy(),
+        sec,
+        {
+            "options": f"cases.peers.laplacian_smooth(steps={steps}): x <- mean of neighbours, "
+            "boundary fixed",
+        },
+    )
 
 
 # --------------------------------------------------------------------------- interface
 
-_PACKAGE = {"triangle": "triangle", "gmsh_frontal": "gmsh", "gmsh_delaunay": "gmsh",
-            "pymeshlab_remesh": "pymeshlab", "laplacian_pymeshlab": "pymeshlab", "laplacian_uniform": "scipy"}
+_PACKAGE = {
+    "triangle": "triangle",
+    "gmsh_frontal": "gmsh",
+    "gmsh_delaunay": "gmsh",
+    "pymeshlab_remesh": "pymeshlab",
+    "pymeshlab_remesh_free": "pymeshlab",
+    "laplacian_pymeshlab": "pymeshlab",
+    "laplacian_uniform": "scipy",
+}
 
 
-def run_peer(name: str, loops: Sequence[np.ndarray], target_elements: int, *,
-             base: tuple[np.ndarray, np.ndarray] | None = None, laplacian_steps: int = LAPLACIAN_STEPS):
+def run_peer(
+    name: str,
+    loops: Sequence[np.ndarray],
+    target_elements: int,
+    *,
+    base: tuple[np.ndarray, np.ndarray] | None = None,
+    laplacian_steps: int = LAPLACIAN_STEPS,
+):
     """Mesh the region bounded by ``loops`` with peer ``name``; see the module docstring."""
     import importlib
 
@@ -357,7 +458,7 @@ def run_peer(name: str, loops: Sequence[np.ndarray], target_elements: int, *,
         importlib.import_module(_PACKAGE[name])
     except Exception as exc:  # ImportError, or a broken binary wheel
         return _skip(f"package {_PACKAGE[name]!r} not importable: {exc}")
-    loops = [np.asarray(l, dtype=np.float64)[:, :2] for l in loops]
+    loops = [np.asarray(lp, dtype=np.float64)[:, :2] for lp in loops]
     boundary = np.vstack(loops)
     target = max(int(target_elements), 1)
     if name in POSTPROCESSORS and base is None:
@@ -369,8 +470,10 @@ def run_peer(name: str, loops: Sequence[np.ndarray], target_elements: int, *,
             p, t, sec, info = _gmsh(loops, target, 6)
         elif name == "gmsh_delaunay":
             p, t, sec, info = _gmsh(loops, target, 5)
-        elif name == "pymeshlab_remesh":
-            p, t, sec, info = _pymeshlab_remesh(loops, target, base)
+        elif name in ("pymeshlab_remesh", "pymeshlab_remesh_free"):
+            p, t, sec, info = _pymeshlab_remesh(
+                loops, target, base, lock=name == "pymeshlab_remesh"
+            )
         elif name == "laplacian_pymeshlab":
             p, t, sec, info = _laplacian_pymeshlab(base, len(boundary), laplacian_steps)
         else:
@@ -378,7 +481,9 @@ def run_peer(name: str, loops: Sequence[np.ndarray], target_elements: int, *,
     except Exception as exc:
         return _skip(f"{type(exc).__name__}: {exc}", status="failed")
     shift, nb = metrics.boundary_shift(boundary, p, t)
-    info.update(status="ok", reason="", boundary_shift=shift, boundary_nodes=nb, inverted=_inverted(p, t))
+    info.update(
+        status="ok", reason="", boundary_shift=shift, boundary_nodes=nb, inverted=_inverted(p, t)
+    )
     return p, t, sec, info
 
 

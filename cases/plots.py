@@ -1,0 +1,211 @@
+"""Figures of the case reports (matplotlib, Agg backend, no screen needed).
+
+``panels``: the paper's six panels (a)–(f) for one case; ``histograms``: the
+radius-ratio histograms of every method on the same bins; ``meshes``: every
+method's mesh side by side with the elements below 0.7 filled.
+"""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.collections import EllipseCollection  # noqa: E402
+
+BINS = np.linspace(0.0, 1.0, 21)  # 0.05 wide, as the paper's histograms
+LOW = 0.7  # the paper's "low radius ratio" threshold
+_SAVE = dict(dpi=110, bbox_inches="tight", metadata={"Software": None})
+
+
+def _save(fig, path):
+    """Save as a palette PNG (Pillow quantization: ~4x smaller, the report is committed), then "
+    "close."""
+    import io
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", **_SAVE)
+    plt.close(fig)
+    try:
+        from PIL import Image
+
+        buf.seek(0)
+        img = (
+            Image.open(buf)
+            .convert("RGB")
+            .quantize(colors=128, method=Image.Quantize.MEDIANCUT, dither=0)
+        )
+        img.save(path, format="PNG", optimize=True)
+    except ImportError:
+        with open(path, "wb") as fh:
+            fh.write(buf.getvalue())
+
+
+def _mesh(ax, points, triangles, title=None, *, rho=None, lw=0.35):
+    ax.triplot(points[:, 0], points[:, 1], triangles, color="k", lw=lw)
+    if rho is not None and (rho < LOW).any():
+        bad = triangles[rho < LOW]
+        ax.tripcolor(
+            points[:, 0],
+            points[:, 1],
+            bad,
+            facecolors=np.ones(len(bad)),
+            cmap="Reds",
+            vmin=0,
+            vmax=1.4,
+            edgecolors="none",
+        )
+    ax.set_aspect("equal")
+    ax.axis("off")
+    if title:
+        ax.set_title(title, fontsize=9)
+
+
+def _bubbles(ax, points, radii, triangles, title):
+    ax.triplot(points[:, 0], points[:, 1], triangles, color="0.8", lw=0.3)
+    ax.add_collection(
+        EllipseCollection(
+            2 * radii,
+            2 * radii,
+            np.zeros_like(radii),
+            units="xy",
+            offsets=points,
+            offset_transform=ax.transData,
+            facecolors="none",
+            edgecolors="tab:blue",
+            linewidths=0.4,
+        )
+    )
+    ax.plot(points[:, 0], points[:, 1], ".", ms=1.0, color="k")
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.axis("off")
+    ax.set_title(title, fontsize=9)
+
+
+def _hist(ax, rho, title, color="tab:blue", ref=None):
+    w = np.full(len(rho), 100.0 / max(len(rho), 1))
+    if ref is not None:
+        ax.hist(
+            ref,
+            bins=BINS,
+            weights=np.full(len(ref), 100.0 / max(len(ref), 1)),
+            histtype="step",
+            color="0.55",
+            lw=0.9,
+            label="bubblemesh §2",
+        )
+    ax.hist(rho, bins=BINS, weights=w, color=color, alpha=0.85, edgecolor="white", lw=0.3)
+    ax.axvline(LOW, color="tab:red", lw=0.8, ls="--")
+    ax.set_xlim(0, 1)
+    ax.set_xlabel("radius ratio ρ", fontsize=8)
+    ax.set_ylabel("% of elements", fontsize=8)
+    ax.tick_params(labelsize=7)
+    n_low = int((rho < LOW).sum())
+    ax.set_title(
+        f"{title}\nmean {rho.mean():.3f}, min {rho.min():.3f}, {n_low} < {LOW}", fontsize=8
+    )
+
+
+def panels(path, title, delaunay, optimized, amplification):
+    """Paper-style figure.  ``delaunay`` / ``optimized``: dicts with points,
+    triangles, radii, rho (the §2 and §2+§3 meshes)."""
+    fig, ax = plt.subplots(3, 2, figsize=(9, 12))
+    _mesh(ax[0, 0], delaunay["points"], delaunay["triangles"], "(a) Delaunay mesh (§2)")
+    _mesh(ax[0, 1], optimized["points"], optimized["triangles"], "(b) Optimized mesh (§2 + §3)")
+    _bubbles(
+        ax[1, 0],
+        delaunay["points"],
+        amplification * delaunay["radii"],
+        delaunay["triangles"],
+        f"(c) Initial node bubbles ({amplification:g} × §2 radii, §3.1)",
+    )
+    _bubbles(
+        ax[1, 1],
+        optimized["points"],
+        optimized["radii"],
+        optimized["triangles"],
+        "(d) Optimized node bubbles",
+    )
+    _hist(ax[2, 0], delaunay["rho"], "(e) Mesh quality (Delaunay mesh)", color="tab:orange")
+    _hist(ax[2, 1], optimized["rho"], "(f) Mesh quality (Optimized mesh)", color="tab:green")
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    _save(fig, path)
+
+
+def _grid(n):
+    cols = min(4, n)
+    return (n + cols - 1) // cols, cols
+
+
+def histograms(path, title, results, labels, ref_key="bubblemesh_delaunay"):
+    """Small multiples: one ρ histogram per method, same bins and axes, the §2
+    histogram outlined in each for reference.  ``results``: method -> rho."""
+    keys = list(results)
+    rows, cols = _grid(len(keys))
+    fig, axes = plt.subplots(
+        rows, cols, figsize=(3.2 * cols, 2.9 * rows), sharex=True, sharey=True, squeeze=False
+    )
+    ref = results.get(ref_key)
+    for ax, k in zip(axes.flat, keys, strict=False):
+        _hist(
+            ax,
+            results[k],
+            labels.get(k, k),
+            color="tab:green" if k.startswith("bubblemesh") else "tab:blue",
+            ref=None if k == ref_key else ref,
+        )
+    for ax in list(axes.flat)[len(keys) :]:
+        ax.axis("off")
+    fig.suptitle(
+        f"{title}\nradius-ratio histograms on the same bins (grey outline: bubblemesh §2; "
+        f"dashed: ρ = {LOW})",
+        fontsize=10,
+    )
+    fig.tight_layout()
+    _save(fig, path)
+
+
+def meshes(path, title, results, labels):
+    """Small multiples of every method's mesh, elements with ρ < 0.7 filled red.
+    ``results``: method -> (points, triangles, rho)."""
+    keys = list(results)
+    rows, cols = _grid(len(keys))
+    fig, axes = plt.subplots(rows, cols, figsize=(3.6 * cols, 3.4 * rows), squeeze=False)
+    for ax, k in zip(axes.flat, keys, strict=False):
+        p, t, rho = results[k]
+        _mesh(
+            ax,
+            p,
+            t,
+            f"{labels.get(k, k)}\n{len(t)} elements, {int((rho < LOW).sum())} with ρ < {LOW}",
+            rho=rho,
+            lw=0.25,
+        )
+    for ax in list(axes.flat)[len(keys) :]:
+        ax.axis("off")
+    fig.suptitle(f"{title}: all methods on the same boundary nodes (red: ρ < {LOW})", fontsize=10)
+    fig.tight_layout()
+    _save(fig, path)
+
+
+def benchmark(path, df):
+    """Log-log seconds vs elements per method (benchmark.csv rows with status ok)."""
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
+    for method, g in df.groupby("method", sort=False):
+        g = g.sort_values("elements")
+        ax[0].loglog(g["elements"], g["seconds"], "o-", ms=3, label=method)
+        ax[1].semilogx(g["elements"], g["elements_per_s"], "o-", ms=3, label=method)
+    ax[0].set_xlabel("elements")
+    ax[0].set_ylabel("seconds (min of repeats)")
+    ax[1].set_xlabel("elements")
+    ax[1].set_ylabel("elements per second")
+    ax[0].grid(True, which="both", alpha=0.3)
+    ax[1].grid(True, which="both", alpha=0.3)
+    ax[0].legend(fontsize=8)
+    fig.suptitle("Unit disk, uniformly spaced boundary nodes", fontsize=10)
+    fig.tight_layout()
+    _save(fig, path)
