@@ -1,0 +1,427 @@
+"""Speed and memory benchmark (issue 6): the unit disk from ~1k to ~1M elements.
+
+    python -m cases.benchmark [--max-elements 1000000] [--repeats 3] [--quick] [--out reports]
+
+The unit disk with ``n`` uniformly spaced boundary nodes; bubblemesh's §2 mesh
+of it has ``C_DISK · n²`` elements (C_DISK measured: 0.1838, constant from 64
+to 600 boundary nodes), so ``n = sqrt(target / C_DISK)``: about 2,330 boundary
+nodes for 1,000,000 triangles.
+
+Each (method, size) is measured in a fresh child process (``--child``), so its
+peak resident memory is its own: the child imports everything, warms up on a
+tiny disk (numba kernels loaded or compiled, Gmsh/Triangle code paths touched),
+then runs ``repeats`` timed repetitions and reports the minimum wall time.
+Memory is ``resource.getrusage(RUSAGE_SELF).ru_maxrss`` of the child:
+``peak_mb`` is the child's whole peak RSS (interpreter and libraries included,
+the number the ≤ 600 MB target is about) and ``peak_delta_mb`` the part above
+its RSS after warm-up.
+
+Methods: ``bubblemesh_generate`` (§2), ``bubblemesh_optimize`` (§3 with the
+final re-triangulation) and ``bubblemesh_total`` (both); ``triangle``
+(``pq30a<A>YQ``, A tuned untimed to the §2 element count); ``gmsh_frontal``
+(``Mesh.Algorithm=6``, uniform size tuned untimed to the same count; only up to
+``GMSH_CAP`` elements, as it is far slower).  ``ratio_to_triangle`` is the
+per-element time over Triangle's at the same size.  The cold numba compile
+time (empty cache) and the warm first call (filled cache) are measured in fresh
+processes too.  Writes ``benchmark.csv``, ``benchmark.json`` (slopes, compile
+times, machine) and ``figures/benchmark.png``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+C_DISK = 0.1838  # bubblemesh §2 elements per (boundary nodes)² on the unit disk
+TARGETS = (1_000, 3_000, 10_000, 30_000, 100_000, 300_000, 1_000_000)
+QUICK_TARGETS = (300, 1_000)
+GMSH_CAP = 200_000
+SLOPE_FROM = 10_000  # fit the log-log slope on sizes >= this
+COLUMNS = [
+    "method",
+    "elements",
+    "seconds",
+    "elements_per_s",
+    "peak_mb",
+    "ratio_to_triangle",
+    "boundary_nodes",
+    "repeats",
+    "peak_delta_mb",
+    "status",
+    "note",
+]
+
+
+def boundary_nodes_for(target: int) -> int:
+    return max(12, int(round(np.sqrt(target / C_DISK))))
+
+
+def _disk(n):
+    from cases.geometry import circle
+
+    return [circle((0.0, 0.0), 1.0, n)]
+
+
+def _rss_mb() -> float:
+    import resource
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB on Linux
+
+
+# --------------------------------------------------------------------------- child side
+
+
+def _child_bubblemesh(n, repeats):
+    import bubblemesh as bm
+
+    for _ in range(2):  # warm-up: load/compile every kernel (a 16-node disk left some paths cold)
+        bm.optimize(bm.generate(bm.Domain.from_loops(_disk(64))))
+    base = _rss_mb()
+    dom = bm.Domain.from_loops(_disk(n))
+    gen = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        m = bm.generate(dom)
+        gen.append(time.perf_counter() - t0)
+    peak_gen = _rss_mb()
+    opt, tot = [], []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        m = bm.generate(dom)
+        t1 = time.perf_counter()
+        o = bm.optimize(m)
+        t2 = time.perf_counter()
+        gen.append(t1 - t0)
+        opt.append(t2 - t1)
+        tot.append(t2 - t0)
+    peak = _rss_mb()
+    ne = len(m.triangles)
+    note = f"optimize: {o.stats.get('iterations', '?')} iterations"
+    return [
+        dict(
+            method="bubblemesh_generate",
+            elements=ne,
+            seconds=min(gen),
+            peak_mb=peak_gen,
+            peak_delta_mb=peak_gen - base,
+            note="peak over generate-only repetitions",
+        ),
+        dict(
+            method="bubblemesh_optimize",
+            elements=len(o.triangles),
+            seconds=min(opt),
+            peak_mb=peak,
+            peak_delta_mb=peak - base,
+            note=note + "; peak of the whole pipeline",
+        ),
+        dict(
+            method="bubblemesh_total",
+            elements=len(o.triangles),
+            seconds=min(tot),
+            peak_mb=peak,
+            peak_delta_mb=peak - base,
+            note="generate + optimize",
+        ),
+    ]
+
+
+def _child_triangle(n, repeats, target):
+    import triangle as tr
+
+    from cases import peers
+
+    loops = _disk(n)
+    tr.triangulate(
+        {
+            "vertices": loops[0][:12].copy(),
+            "segments": np.c_[np.arange(12), (np.arange(12) + 1) % 12],
+        },
+        "pq30a0.5YQ",
+    )  # warm-up
+    pts, segs = peers._segments(loops)
+    data = {"vertices": pts, "segments": segs}
+    area, best = np.pi / target, None
+    for _ in range(4):  # untimed tuning of the area bound to the element count
+        ne = len(tr.triangulate(data, f"pq30a{area:.6g}YQ")["triangles"])
+        if best is None or abs(np.log(ne / target)) < abs(np.log(best[1] / target)):
+            best = (area, ne)
+        area *= ne / target
+    area = best[0]
+    base = _rss_mb()
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = tr.triangulate(data, f"pq30a{area:.6g}YQ")
+        times.append(time.perf_counter() - t0)
+    peak = _rss_mb()
+    return [
+        dict(
+            method="triangle",
+            elements=len(out["triangles"]),
+            seconds=min(times),
+            peak_mb=peak,
+            peak_delta_mb=peak - base,
+            note=f"pq30a{area:.6g}YQ",
+        )
+    ]
+
+
+def _child_gmsh(n, repeats, target):
+    loops = _disk(n)
+    _gmsh_at(_disk(12), 1.0)  # warm-up
+    factor, best = 1.0, None
+    for _ in range(3):  # untimed tuning of the uniform size to the element count
+        ne, _ = _gmsh_at(loops, factor)
+        if best is None or abs(np.log(ne / target)) < abs(np.log(best[1] / target)):
+            best = (factor, ne)
+        factor *= float(np.sqrt(ne / target))
+    factor = best[0]
+    base = _rss_mb()
+    runs = [_gmsh_at(loops, factor) for _ in range(repeats)]
+    peak = _rss_mb()
+    return [
+        dict(
+            method="gmsh_frontal",
+            elements=runs[-1][0],
+            seconds=min(r[1] for r in runs),
+            peak_mb=peak,
+            peak_delta_mb=peak - base,
+            note=f"Mesh.Algorithm=6, uniform size {factor:.4g} x boundary spacing, "
+            "boundary transfinite",
+        )
+    ]
+
+
+def _gmsh_at(loops, factor):
+    """One Gmsh Frontal-Delaunay run of the disk at uniform size factor x boundary spacing,
+    boundary nodes kept (transfinite segments).  Returns (elements, seconds w/o initialize)."""
+    import gmsh
+
+    from cases import peers
+
+    loop = loops[0]
+    sizes = peers._node_sizes(loop)
+    gmsh.initialize(readConfigFiles=False, interruptible=False)
+    try:
+        for k, v in (
+            ("General.Terminal", 0),
+            ("General.Verbosity", 0),
+            ("General.NumThreads", 1),
+            ("Mesh.Algorithm", 6),
+            ("Mesh.MeshSizeExtendFromBoundary", 0),
+            ("Mesh.MeshSizeFromCurvature", 0),
+            ("Mesh.MeshSizeMin", factor * sizes.mean()),
+            ("Mesh.MeshSizeMax", factor * sizes.mean()),
+        ):
+            gmsh.option.setNumber(k, float(v))
+        t0 = time.perf_counter()
+        nn = len(loop)
+        pt = [gmsh.model.geo.addPoint(x, y, 0.0, h) for (x, y), h in zip(loop, sizes, strict=True)]
+        ln = [gmsh.model.geo.addLine(pt[i], pt[(i + 1) % nn]) for i in range(nn)]
+        for lt in ln:
+            gmsh.model.geo.mesh.setTransfiniteCurve(lt, 2)
+        surf = gmsh.model.geo.addPlaneSurface([gmsh.model.geo.addCurveLoop(ln)])
+        gmsh.model.geo.synchronize()
+        gmsh.model.mesh.generate(2)
+        _, en = gmsh.model.mesh.getElementsByType(2, surf)
+        sec = time.perf_counter() - t0
+    finally:
+        gmsh.finalize()
+    return len(en) // 3, sec
+
+
+def _child(spec: dict) -> list[dict]:
+    m, n, r = spec["method"], spec["n_boundary"], spec["repeats"]
+    if m == "bubblemesh":
+        return _child_bubblemesh(n, r)
+    if m == "triangle":
+        return _child_triangle(n, r, spec["target"])
+    if m == "gmsh_frontal":
+        return _child_gmsh(n, r, spec["target"])
+    raise ValueError(m)
+
+
+# --------------------------------------------------------------------------- parent side
+
+
+def _run_child(spec: dict, timeout: float, env=None) -> list[dict]:
+    cmd = [sys.executable, "-m", "cases.benchmark", "--child", json.dumps(spec)]
+    root = str(Path(__file__).resolve().parent.parent)
+    env = dict(os.environ if env is None else env)
+    env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env, cwd=root)
+    except subprocess.TimeoutExpired:
+        return [
+            dict(method=spec["method"], status="failed", note=f"timed out after {timeout:.0f} s")
+        ]
+    if p.returncode != 0:
+        last = (p.stderr.strip().splitlines() or ["?"])[-1]
+        missing = "ModuleNotFoundError" in p.stderr or "ImportError" in p.stderr
+        return [
+            dict(method=spec["method"], status="skipped" if missing else "failed", note=last[:300])
+        ]
+    return json.loads(p.stdout.strip().splitlines()[-1])
+
+
+def compile_times(timeout: float = 900) -> dict:
+    """First-call time of generate+optimize on a tiny disk in a fresh process: with an empty
+    numba cache (cold: compile everything) and again with the cache it filled (warm)."""
+    code = (
+        "import time; t0=time.perf_counter(); import bubblemesh as bm; from cases.geometry import "
+        "circle;"
+        "t1=time.perf_counter(); "
+        "bm.optimize(bm.generate(bm.Domain.from_loops([circle((0,0),1,16)])));"
+        "t2=time.perf_counter(); print(t1-t0, t2-t1)"
+    )
+    root = str(Path(__file__).resolve().parent.parent)
+    out = {}
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=root)
+        for key in ("cold", "warm"):
+            try:
+                p = subprocess.run(
+                    [sys.executable, "-c", code],
+                    capture_output=True,
+                    text=True,
+                    timeout=timeout,
+                    env=env,
+                    cwd=root,
+                )
+                imp, first = map(float, p.stdout.split())
+                out[f"{key}_import_s"], out[f"{key}_first_call_s"] = imp, first
+            except Exception as exc:  # report, never crash the benchmark
+                out[f"{key}_error"] = f"{type(exc).__name__}: {exc}"
+    return out
+
+
+def loglog_slope(df, method, min_elements=SLOPE_FROM):
+    g = df[(df.method == method) & (df.status == "ok") & (df.elements >= min_elements)]
+    if len(g) < 2:
+        return float("nan")
+    return float(
+        np.polyfit(np.log(g.elements.astype(float)), np.log(g.seconds.astype(float)), 1)[0]
+    )
+
+
+def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress=True):
+    import pandas as pd
+    from tqdm import tqdm
+
+    from cases import plots
+    from cases.reproduce import environment
+
+    out = Path(out)
+    (out / "figures").mkdir(parents=True, exist_ok=True)
+    targets = [t for t in (QUICK_TARGETS if quick else TARGETS) if t <= max_elements] or [
+        min(max_elements, 300)
+    ]
+    repeats = 1 if quick else repeats
+    gmsh_cap = 1_000 if quick else GMSH_CAP
+    t_start = time.perf_counter()
+    rows = []
+    for target in tqdm(
+        targets, desc="benchmark", unit="size", disable=not progress, file=sys.stderr
+    ):
+        n = boundary_nodes_for(target)
+        timeout = 120 + 0.002 * target * repeats
+        got = _run_child({"method": "bubblemesh", "n_boundary": n, "repeats": repeats}, timeout)
+        ref = next(
+            (
+                r["elements"]
+                for r in got
+                if r.get("method") == "bubblemesh_generate"
+                and r.get("status", "ok") == "ok"
+                and "elements" in r
+            ),
+            None,
+        )
+        match = ref or int(C_DISK * n * n)
+        got += _run_child(
+            {"method": "triangle", "n_boundary": n, "repeats": repeats, "target": match}, timeout
+        )
+        if target <= gmsh_cap:
+            got += _run_child(
+                {"method": "gmsh_frontal", "n_boundary": n, "repeats": repeats, "target": match},
+                timeout * 5,
+            )
+        else:
+            got.append(
+                dict(
+                    method="gmsh_frontal",
+                    status="skipped",
+                    note=f"not run above {gmsh_cap} elements (too slow; cap GMSH_CAP)",
+                )
+            )
+        for r in got:
+            r.setdefault("status", "ok")
+            r["boundary_nodes"], r["repeats"] = n, repeats
+            r.setdefault("elements", match if r["status"] != "ok" else None)
+        rows += got
+    df = pd.DataFrame(rows)
+    for c in COLUMNS:
+        if c not in df:
+            df[c] = None
+    df["elements_per_s"] = df["elements"] / df["seconds"]
+    tri = df[(df.method == "triangle") & (df.status == "ok")].set_index("boundary_nodes")
+    per_el = df["seconds"] / df["elements"]
+    tri_per_el = df["boundary_nodes"].map(tri["seconds"] / tri["elements"])
+    df["ratio_to_triangle"] = per_el / tri_per_el
+    df = df[COLUMNS]
+    df.to_csv(out / "benchmark.csv", index=False, float_format="%.6g")
+
+    slopes = {m: loglog_slope(df, m) for m in dict.fromkeys(df.method)}
+    meta = environment()
+    meta.update(
+        quick=quick,
+        repeats=repeats,
+        targets=targets,
+        gmsh_cap=gmsh_cap,
+        c_disk=C_DISK,
+        slope_from_elements=SLOPE_FROM,
+        loglog_slopes=slopes,
+        memory="ru_maxrss of a fresh child process per (method, size): peak_mb whole process, "
+        "peak_delta_mb above its RSS after warm-up",
+        compile=({"skipped": "quick mode"} if quick else compile_times()),
+        total_seconds=time.perf_counter() - t_start,
+    )
+    (out / "benchmark.json").write_text(json.dumps(meta, indent=2, default=str) + "\n")
+    ok = df[df.status == "ok"]
+    if not ok.empty:
+        plots.benchmark(out / "figures" / "benchmark.png", ok)
+    for m, s in slopes.items():
+        print(f"log-log slope of seconds vs elements (>= {SLOPE_FROM} elements), {m}: {s:.3f}")
+    print(f"compile: {meta['compile']}")
+    return df
+
+
+def _cli(argv=None):
+    ap = argparse.ArgumentParser(
+        prog="python -m cases.benchmark", description=__doc__.split("\n\n")[0]
+    )
+    ap.add_argument("--max-elements", type=int, default=1_000_000)
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument(
+        "--quick", action="store_true", help="tiny sizes, 1 repeat, no compile-time probe (CI)"
+    )
+    ap.add_argument("--out", default="reports")
+    ap.add_argument("--no-progress", action="store_true")
+    ap.add_argument("--child", help=argparse.SUPPRESS)
+    a = ap.parse_args(argv)
+    if a.child:
+        print(json.dumps(_child(json.loads(a.child))))
+        return
+    df = main(a.max_elements, a.repeats, a.quick, a.out, progress=not a.no_progress)
+    print(df.to_string(index=False))
+
+
+if __name__ == "__main__":
+    _cli()
