@@ -31,7 +31,14 @@ from .bubbles import boundary_radii, element_radius, triangle_area
 from .errors import MeshingError
 from .mesh import Mesh
 from .predicates import orient2d
-from .triangulation import OK, _MESSAGES, constrained_delaunay, fill_cavity, find_cavity
+from .triangulation import (
+    OK,
+    _MESSAGES,
+    constrained_delaunay,
+    fill_cavity,
+    find_cavity,
+    hilbert_order,
+)
 
 # kernel status codes (beyond the triangulation's)
 STOP_POPULATION = 1  # eq. 6 reached
@@ -329,7 +336,9 @@ def generate(domain, *, max_insertions=None, progress=False):
             bar.close()
     if status == STOP_MAX_INSERTIONS and (max_insertions is None or limit < max_insertions):
         raise MeshingError(f"generation reached its insertion bound {bound} without eq. 6")
-    return _as_mesh(domain, ws, state, acc, radii, status, time.perf_counter() - start)
+    mesh = _as_mesh(domain, ws, state, acc, radii, status, 0.0)
+    mesh.stats["seconds"] = time.perf_counter() - start
+    return mesh
 
 
 def _run(ws, state, acc, area_geo, limit, bar):
@@ -358,8 +367,33 @@ def _progress_bar(progress, total):
     return tqdm(total=total, desc="generate (§2)", unit="node")
 
 
+def spatial_renumbering(points, triangles, neighbors, n_fixed):
+    """Renumber nodes after ``n_fixed`` and all triangles along a Hilbert curve.
+
+    §2 creates nodes in density order, scattered over the domain; neighbours
+    that are far apart in memory make every later pass over the mesh (the §3
+    iterations above all) wait on cache misses.  Returns the permuted
+    (points, triangles, neighbors) and the node permutation ``old_of_new``."""
+    n = len(points)
+    old_of_new = np.arange(n)
+    old_of_new[n_fixed:] = n_fixed + hilbert_order(points[n_fixed:])
+    new_of_old = np.empty(n, np.int64)
+    new_of_old[old_of_new] = np.arange(n)
+    tri = new_of_old[triangles]
+    tri_order = hilbert_order(points[triangles].mean(axis=1))
+    tri_new_of_old = np.empty(len(tri), np.int64)
+    tri_new_of_old[tri_order] = np.arange(len(tri))
+    nbr = neighbors[tri_order]
+    nbr = np.where(nbr >= 0, tri_new_of_old[np.maximum(nbr, 0)], -1)
+    return points[old_of_new], tri[tri_order], nbr, old_of_new
+
+
 def _as_mesh(domain, ws, state, acc, boundary, status, seconds):
     npts, ntri = int(state[S_NPTS]), int(state[S_NTRI])
+    n_b = len(boundary)
+    points, triangles, neighbors, order = spatial_renumbering(
+        ws.P[:npts], ws.tri[:ntri], ws.nbr[:ntri], n_b
+    )
     stats = {
         "insertions": int(state[S_INSERTIONS]),
         "bubble_area": float(acc[0] + acc[1]),
@@ -368,12 +402,12 @@ def _as_mesh(domain, ws, state, acc, boundary, status, seconds):
         "seconds": seconds,
     }
     return Mesh(
-        points=ws.P[:npts].copy(),
-        triangles=ws.tri[:ntri].copy(),
-        neighbors=ws.nbr[:ntri].copy(),
-        radii=ws.R[:npts].copy(),
+        points=points,
+        triangles=triangles,
+        neighbors=neighbors,
+        radii=ws.R[:npts][order],
         segments=np.asarray(domain.segments, dtype=np.int64),
-        n_boundary=len(boundary),
+        n_boundary=n_b,
         domain=domain,
         stats=stats,
     )
