@@ -58,7 +58,7 @@ def exact_integers(points) -> tuple[list[tuple[int, int]], int]:
     ratios = [float(x).as_integer_ratio() for x in pts.ravel()]
     shift = max((d.bit_length() - 1 for _, d in ratios), default=0)
     ints = [n << (shift - (d.bit_length() - 1)) for n, d in ratios]
-    return list(zip(ints[0::2], ints[1::2])), shift
+    return list(zip(ints[0::2], ints[1::2], strict=False)), shift
 
 
 def orient_int(a, b, c) -> int:
@@ -264,7 +264,8 @@ def check_valid(points, triangles, neighbors=None) -> dict:
                 if expect is None:
                     if got != -1:
                         problems.append(
-                            f"neighbors[{t},{i}] = {got} but edge {(a, b)} is a boundary edge (expected -1)"
+                            f"neighbors[{t},{i}] = {got} but edge {(a, b)} is a boundary edge "
+                            "(expected -1)"
                         )
                 else:
                     u, j = expect
@@ -274,7 +275,8 @@ def check_valid(points, triangles, neighbors=None) -> dict:
                         )
                     elif int(nb[u, j]) != t:
                         problems.append(
-                            f"neighbors not symmetric: neighbors[{t},{i}]={u} but neighbors[{u},{j}]={int(nb[u, j])}"
+                            f"neighbors not symmetric: neighbors[{t},{i}]={u} but "
+                            f"neighbors[{u},{j}]={int(nb[u, j])}"
                         )
         _fail("neighbour array inconsistent with the contract convention", problems)
 
@@ -318,8 +320,12 @@ def _circumcircles(P, shift, tri):
             ) from None
         exact.append((cx, cy, r2))
         # Fraction -> float is correctly rounded (scaling first avoids overflow)
-        centers[k] = (float(cx / (1 << shift)), float(cy / (1 << shift)))
-        radii[k] = math.sqrt(float(r2 / (1 << (2 * shift))))
+        try:
+            centers[k] = (float(cx / (1 << shift)), float(cy / (1 << shift)))
+            radii[k] = math.sqrt(float(r2 / (1 << (2 * shift))))
+        except OverflowError:  # a sliver whose circle exceeds the float range
+            centers[k] = (0.0, 0.0)
+            radii[k] = math.inf
     return exact, centers, radii
 
 
@@ -333,13 +339,17 @@ def _candidates(pts, centers, radii):
     mag = float(np.max(np.abs(pts))) if len(pts) else 0.0
     big = np.maximum(np.abs(centers).max(axis=1), mag)
     rq = radii * (1 + 1e-9) + 64 * np.spacing(big) + 1e-300
-    if not np.all(np.isfinite(rq)):
-        raise AssertionError("circumradius overflow: cannot prefilter")
+    huge = ~np.isfinite(rq)  # circle beyond the float range: every point is a candidate
+    everyone = list(range(len(pts)))
     if _KDTree is not None:
         tree = _KDTree(pts)
-        return tree.query_ball_point(centers, rq)
+        found = tree.query_ball_point(centers, np.where(huge, 0.0, rq))
+        return [everyone if h else f for h, f in zip(huge, found, strict=False)]
     out = []
-    for c, r in zip(centers, rq):
+    for c, r in zip(centers, rq, strict=False):
+        if not np.isfinite(r):
+            out.append(everyone)
+            continue
         d = np.hypot(pts[:, 0] - c[0], pts[:, 1] - c[1])
         out.append(np.nonzero(d <= r)[0].tolist())
     return out
@@ -536,14 +546,15 @@ def check_locally_delaunay(points, triangles, segments=()) -> dict:
         for i in range(3):
             opposite[(row[(i + 1) % 3], row[(i + 2) % 3])] = (t, row[i])
     problems = []
-    for (a, b), (t, apex) in opposite.items():
+    for (a, b), (t, _apex) in opposite.items():
         if (min(a, b), max(a, b)) in constrained or (b, a) not in opposite:
             continue
         _, other = opposite[(b, a)]
         row = tri[t].tolist()
         if incircle_int(P[row[0]], P[row[1]], P[row[2]], P[other]) > 0:
             problems.append(
-                f"edge {(a, b)} of triangle {t} {row} is not locally Delaunay (vertex {other} inside)"
+                f"edge {(a, b)} of triangle {t} {row} is not locally Delaunay "
+                f"(vertex {other} inside)"
             )
     _fail("edges not locally Delaunay", problems)
     return {}
@@ -738,7 +749,8 @@ def check_conforming(points, triangles, segments, area=None, rel=1e-12) -> dict:
     for a, b in sorted(bnd):
         if (min(a, b), max(a, b)) not in seg_undirected:
             problems.append(
-                f"mesh boundary edge {(a, b)} ({pts[a].tolist()} -> {pts[b].tolist()}) is not a segment"
+                f"mesh boundary edge {(a, b)} ({pts[a].tolist()} -> {pts[b].tolist()}) "
+                "is not a segment"
             )
         elif (a, b) not in seg_directed:
             problems.append(
@@ -771,7 +783,8 @@ def check_conforming(points, triangles, segments, area=None, rel=1e-12) -> dict:
     err = abs(total - expected) / abs(expected)
     if not err <= rel:
         raise AssertionError(
-            f"triangle areas sum to {total!r}, domain area is {expected!r} (rel err {err:.3e} > {rel})"
+            f"triangle areas sum to {total!r}, domain area is {expected!r} "
+            f"(rel err {err:.3e} > {rel})"
         )
     return {"loops": len(loops), "area": total, "rel_area_error": err}
 
@@ -807,7 +820,8 @@ def check_trimesh(points, triangles, segments=None, area=None) -> dict:
         want = {(min(a, b), max(a, b)) for a, b in seg.tolist()}
         if tm_boundary != want:
             problems.append(
-                f"trimesh boundary edges differ from segments: extra {sorted(tm_boundary - want)[:5]}, "
+                "trimesh boundary edges differ from segments: "
+                f"extra {sorted(tm_boundary - want)[:5]}, "
                 f"missing {sorted(want - tm_boundary)[:5]}"
             )
         n_loops = len(loops_from_segments(seg))
@@ -904,7 +918,7 @@ def element_bubble_radii(points, triangles, radii) -> np.ndarray:
         ex = math.fsum(x[0] for x in xs) / 3
         ey = math.fsum(x[1] for x in xs) / 3
         w = [1.0 / math.hypot(x[0] - ex, x[1] - ey) for x in xs]
-        out[t] = math.fsum(r[i] * wi for i, wi in zip(row, w)) / math.fsum(w)
+        out[t] = math.fsum(r[i] * wi for i, wi in zip(row, w, strict=False)) / math.fsum(w)
     return out
 
 
