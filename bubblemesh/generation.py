@@ -4,8 +4,10 @@
 (b) node bubbles on the boundary (eq. 1-2), element bubbles at the centroids
     (eq. 3-4) and bubble densities D_e = A_e / A_m (eq. 5);
 (c) take the triangle of smallest density from a priority queue (a 4-ary heap
-    of (D_e, triangle id) with lazy invalidation: a triangle slot that is
-    re-used gets a new version, its old heap entries are skipped when popped;
+    of (D_e, triangle id) with lazy invalidation: an entry is live only while
+    its key equals the current density of its triangle slot; a re-used slot
+    leaves its old entries to be skipped when popped (an old entry whose key
+    happens to equal the new density stands for the new triangle exactly);
     ties are broken by the smaller triangle id, so the run is deterministic);
 (d) create a node at its centroid, with the element bubble's radius r_e;
 (e) insert it by Bowyer-Watson (§2.2): the cavity grows from that triangle
@@ -51,43 +53,46 @@ ERR_EMPTY_QUEUE = -20
 S_NPTS, S_NTRI, S_HEAP, S_INSERTIONS, S_STAMP = range(5)
 
 
-# --- 4-ary heap on parallel arrays, ordered by (key, id) -------------------------------
+# --- 4-ary heap of (key, id) rows in one array, ordered by key then id -------------------
 
-HEAP_ARITY = 4  # half the depth of a binary heap; the 4 children share a cache line
-
-
-@njit(cache=True, inline="always")
-def _less(hkey, hid, i, j):
-    return hkey[i] < hkey[j] or (hkey[i] == hkey[j] and hid[i] < hid[j])
+HEAP_ARITY = 4  # half the depth of a binary heap; 4 rows of 16 bytes fill one cache line
 
 
 @njit(cache=True, inline="always")
-def _swap(hkey, hid, hver, i, j):
-    hkey[i], hkey[j] = hkey[j], hkey[i]
-    hid[i], hid[j] = hid[j], hid[i]
-    hver[i], hver[j] = hver[j], hver[i]
+def _less(heap, i, j):
+    return heap[i, 0] < heap[j, 0] or (heap[i, 0] == heap[j, 0] and heap[i, 1] < heap[j, 1])
+
+
+@njit(cache=True, inline="always")
+def _swap(heap, i, j):
+    k = heap[i, 0]
+    v = heap[i, 1]
+    heap[i, 0] = heap[j, 0]
+    heap[i, 1] = heap[j, 1]
+    heap[j, 0] = k
+    heap[j, 1] = v
 
 
 @njit(cache=True)
-def heap_push(hkey, hid, hver, size, key, ident, version):
+def heap_push(heap, size, key, ident):
+    """Add (key, ident); ids are stored as floats, exact below 2**53."""
     i = size
-    hkey[i] = key
-    hid[i] = ident
-    hver[i] = version
+    heap[i, 0] = key
+    heap[i, 1] = ident
     while i > 0:
         parent = (i - 1) // HEAP_ARITY
-        if not _less(hkey, hid, i, parent):
+        if not _less(heap, i, parent):
             break
-        _swap(hkey, hid, hver, i, parent)
+        _swap(heap, i, parent)
         i = parent
     return size + 1
 
 
 @njit(cache=True)
-def heap_pop(hkey, hid, hver, size):
-    """Move the smallest entry to slot ``size - 1`` and restore the heap."""
+def heap_pop(heap, size):
+    """Move the smallest row to ``size - 1`` and restore the heap."""
     size -= 1
-    _swap(hkey, hid, hver, 0, size)
+    _swap(heap, 0, size)
     i = 0
     while True:
         first = HEAP_ARITY * i + 1
@@ -95,11 +100,11 @@ def heap_pop(hkey, hid, hver, size):
             break
         child = first
         for c in range(first + 1, min(first + HEAP_ARITY, size)):
-            if _less(hkey, hid, c, child):
+            if _less(heap, c, child):
                 child = c
-        if not _less(hkey, hid, child, i):
+        if not _less(heap, child, i):
             break
-        _swap(hkey, hid, hver, i, child)
+        _swap(heap, i, child)
         i = child
     return size
 
@@ -131,34 +136,29 @@ def _accumulate(acc, x):
 
 
 @njit(cache=True)
-def init_queue(P, R, tri, ntri, r_e, a_e, version, hkey, hid, hver, acc):
+def init_queue(P, R, tri, ntri, r_e, a_e, density, heap, acc):
     """Step (b): bubbles of the initial triangles, their sum, the queue."""
     size = 0
     for t in range(ntri):
-        d = _bubble(P, R, tri, t, r_e, a_e)
+        density[t] = _bubble(P, R, tri, t, r_e, a_e)
         _accumulate(acc, a_e[t])
-        size = heap_push(hkey, hid, hver, size, d, t, version[t])
+        size = heap_push(heap, size, density[t], t)
     return size
 
 
 @njit(cache=True)
-def _rebuild_queue(P, R, tri, ntri, r_e, a_e, version, hkey, hid, hver, dead):
+def _rebuild_queue(ntri, density, dead, heap):
     """Drop stale heap entries: push every live, splittable triangle afresh."""
     size = 0
     for t in range(ntri):
-        if dead[t]:
-            continue
-        a = tri[t, 0]
-        b = tri[t, 1]
-        c = tri[t, 2]
-        area = triangle_area(P[a, 0], P[a, 1], P[b, 0], P[b, 1], P[c, 0], P[c, 1])
-        size = heap_push(hkey, hid, hver, size, a_e[t] / area, t, version[t])
+        if not dead[t]:
+            size = heap_push(heap, size, density[t], t)
     return size
 
 
 @njit(cache=True)
 def insertion_loop(
-    P, R, tri, nbr, con, vt, r_e, a_e, version, dead, hkey, hid, hver,
+    P, R, tri, nbr, con, vt, r_e, a_e, density, dead, heap,
     state, acc, area_geo, max_insertions, chunk,
     mark, cav, bnd, newt, vstart,
 ):
@@ -183,17 +183,18 @@ def insertion_loop(
         if npts >= P.shape[0] or ntri + 2 > tri.shape[0]:
             status = NEED_CAPACITY
             break
-        if size + ntri + 2 > hkey.shape[0]:
-            size = _rebuild_queue(P, R, tri, ntri, r_e, a_e, version, hkey, hid, hver, dead)
-            if size + ntri + 2 > hkey.shape[0]:
+        if size + ntri + 2 > heap.shape[0]:
+            size = _rebuild_queue(ntri, density, dead, heap)
+            if size + ntri + 2 > heap.shape[0]:
                 status = NEED_CAPACITY
                 break
         # (c) the live triangle of smallest density
         t = -1
         while size > 0:
-            size = heap_pop(hkey, hid, hver, size)
-            if hver[size] == version[hid[size]] and not dead[hid[size]]:
-                t = hid[size]
+            size = heap_pop(heap, size)
+            cand = int(heap[size, 1])
+            if heap[size, 0] == density[cand] and not dead[cand]:
+                t = cand
                 break
         if t < 0:
             status = ERR_EMPTY_QUEUE
@@ -214,9 +215,8 @@ def insertion_loop(
         # (e) Bowyer-Watson insertion from t
         state[S_STAMP] += 1
         ncav, nb = find_cavity(P, ex, ey, t, tri, nbr, con, mark, state[S_STAMP], cav, bnd)
-        if ntri + nb - ncav > tri.shape[0] or size + nb > hkey.shape[0]:
-            d = _bubble(P, R, tri, t, r_e, a_e)  # put t back: it is retried first
-            size = heap_push(hkey, hid, hver, size, d, t, version[t])
+        if ntri + nb - ncav > tri.shape[0] or size + nb > heap.shape[0]:
+            size = heap_push(heap, size, density[t], t)  # put t back: retried first
             status = NEED_CAPACITY
             break
         P[npts, 0] = ex
@@ -231,11 +231,10 @@ def insertion_loop(
         npts += 1
         for k in range(nb):
             s = newt[k]
-            version[s] += 1
             dead[s] = False
-            d = _bubble(P, R, tri, s, r_e, a_e)
+            density[s] = _bubble(P, R, tri, s, r_e, a_e)
             _accumulate(acc, a_e[s])
-            size = heap_push(hkey, hid, hver, size, d, s, version[s])
+            size = heap_push(heap, size, density[s], s)
         state[S_INSERTIONS] += 1
         done += 1
     state[S_NPTS] = npts
@@ -264,15 +263,10 @@ class _Workspace:
         self.con = np.zeros((t_cap, 3), np.uint8)
         self.r_e = np.zeros(t_cap)
         self.a_e = np.zeros(t_cap)
-        self.version = np.zeros(t_cap, np.int64)
+        self.density = np.zeros(t_cap)
         self.dead = np.zeros(t_cap, np.bool_)
-        self._heap(2 * t_cap)
+        self.heap = np.zeros((2 * t_cap, 2))
         self._scratch()
-
-    def _heap(self, h_cap):
-        self.hkey = np.zeros(h_cap)
-        self.hid = np.zeros(h_cap, np.int64)
-        self.hver = np.zeros(h_cap, np.int64)
 
     def _scratch(self):
         t_cap = len(self.tri)
@@ -284,8 +278,8 @@ class _Workspace:
 
     def grow(self, size):
         """Double every capacity, keeping contents (heap entries included)."""
-        for name in ("P", "R", "vt", "tri", "nbr", "con", "r_e", "a_e", "version", "dead",
-                     "hkey", "hid", "hver"):
+        for name in ("P", "R", "vt", "tri", "nbr", "con", "r_e", "a_e", "density", "dead",
+                     "heap"):
             old = getattr(self, name)
             new = np.zeros((2 * old.shape[0],) + old.shape[1:], old.dtype)
             new[: old.shape[0]] = old
@@ -297,7 +291,7 @@ class _Workspace:
 
     def kernel_args(self):
         return (self.P, self.R, self.tri, self.nbr, self.con, self.vt, self.r_e, self.a_e,
-                self.version, self.dead, self.hkey, self.hid, self.hver)
+                self.density, self.dead, self.heap)
 
 
 def _insertion_bound(domain_area, radii):
@@ -329,8 +323,8 @@ def generate(domain, *, max_insertions=None, progress=False):
     state = np.zeros(5, np.int64)
     state[S_NPTS] = len(points)
     state[S_NTRI] = len(tri)
-    state[S_HEAP] = init_queue(ws.P, ws.R, ws.tri, len(tri), ws.r_e, ws.a_e, ws.version,
-                               ws.hkey, ws.hid, ws.hver, acc)
+    state[S_HEAP] = init_queue(ws.P, ws.R, ws.tri, len(tri), ws.r_e, ws.a_e, ws.density,
+                               ws.heap, acc)
     bar = _progress_bar(progress, expected // 2)
     try:
         status = _run(ws, state, acc, area_geo, limit, bar)
