@@ -1,0 +1,596 @@
+"""Domain: the validated refined boundary of paper §2.1 and its area A_geo (eq. 6).
+
+Oracles here share nothing with bubblemesh.domain: rational arithmetic
+(fractions.Fraction) for orientation, segment contact and point location, and
+shapely for areas and hole points.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import sys
+from fractions import Fraction
+
+import numpy as np
+import pytest
+from hypothesis import assume, given
+from hypothesis import strategies as st
+from strategies import budget, domains
+
+from bubblemesh.domain import Domain
+from bubblemesh.errors import GeometryError
+
+SQUARE = [(0.0, 0.0), (4.0, 0.0), (4.0, 4.0), (0.0, 4.0)]
+SMALL_HOLE = [(1.0, 1.0), (1.0, 2.0), (2.0, 2.0), (2.0, 1.0)]
+
+
+# --- exact oracles ----------------------------------------------------------------
+
+
+def orient(a, b, c) -> int:
+    ax, ay, bx, by, cx, cy = (Fraction(v) for v in (*a, *b, *c))
+    det = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+    return (det > 0) - (det < 0)
+
+
+def on_segment(p, a, b) -> bool:
+    return (
+        orient(a, b, p) == 0
+        and min(a[0], b[0]) <= p[0] <= max(a[0], b[0])
+        and min(a[1], b[1]) <= p[1] <= max(a[1], b[1])
+    )
+
+
+def segments_meet(a, b, c, d) -> bool:
+    """Closed segments a-b and c-d share at least one point."""
+    o1, o2, o3, o4 = orient(a, b, c), orient(a, b, d), orient(c, d, a), orient(c, d, b)
+    if o1 * o2 < 0 and o3 * o4 < 0:
+        return True
+    return on_segment(c, a, b) or on_segment(d, a, b) or on_segment(a, c, d) or on_segment(b, c, d)
+
+
+def adjacent_overlap(p, q, r) -> bool:
+    """Segments p-q and q-r share more than q: r on the ray from q through p."""
+    if orient(p, q, r) != 0:
+        return False
+    dot = sum(
+        (Fraction(pi) - Fraction(qi)) * (Fraction(ri) - Fraction(qi)) for pi, qi, ri in zip(p, q, r)
+    )
+    return dot > 0
+
+
+def signed_area(ring) -> Fraction:
+    pts = [(Fraction(x), Fraction(y)) for x, y in ring]
+    return (
+        sum(
+            (
+                pts[i][0] * pts[(i + 1) % len(pts)][1] - pts[(i + 1) % len(pts)][0] * pts[i][1]
+                for i in range(len(pts))
+            ),
+            Fraction(0),
+        )
+        / 2
+    )
+
+
+def strictly_inside(p, ring) -> bool:
+    """Exact crossing test; False on the boundary."""
+    n = len(ring)
+    inside = False
+    for i in range(n):
+        a, b = ring[i], ring[(i + 1) % n]
+        if on_segment(p, a, b):
+            return False
+        if (a[1] > p[1]) != (b[1] > p[1]) and (orient(a, b, p) > 0) == (b[1] > a[1]):
+            inside = not inside
+    return inside
+
+
+def loop_problem(ring) -> bool:
+    """True if a single closed loop is not a simple polygon of positive area."""
+    ring = [tuple(p) for p in ring]
+    if len(ring) >= 2 and ring[-1] == ring[0]:
+        ring = ring[:-1]
+    n = len(ring)
+    if n < 3 or any(ring[i] == ring[(i + 1) % n] for i in range(n)):
+        return True
+    if signed_area(ring) == 0:
+        return True
+    for i in range(n):
+        for j in range(i + 1, n):
+            a, b, c, d = ring[i], ring[(i + 1) % n], ring[j], ring[(j + 1) % n]
+            if j == i + 1:
+                if adjacent_overlap(a, b, d):
+                    return True
+            elif i == 0 and j == n - 1:
+                if adjacent_overlap(b, a, c):
+                    return True
+            elif segments_meet(a, b, c, d):
+                return True
+    return False
+
+
+def loops_meet(ring_a, ring_b) -> bool:
+    na, nb = len(ring_a), len(ring_b)
+    return any(
+        segments_meet(ring_a[i], ring_a[(i + 1) % na], ring_b[j], ring_b[(j + 1) % nb])
+        for i in range(na)
+        for j in range(nb)
+    )
+
+
+CONFLICT = re.compile(
+    r"loop (\d+) \((?:outer|hole \d+)\) segment (\d+) (crosses|touches|overlaps) "
+    r"loop (\d+) \((?:outer|hole \d+)\) segment (\d+)"
+)
+
+
+def assert_names_meeting_segments(message: str, loops) -> None:
+    """The message names two segments of the input that really share a point."""
+    match = CONFLICT.search(message)
+    assert match, message
+    k1, s1, _, k2, s2 = match.groups()
+    rings = [[tuple(p) for p in np.asarray(r, dtype=float).tolist()] for r in loops]
+    r1, r2 = rings[int(k1)], rings[int(k2)]
+    s1, s2 = int(s1), int(s2)
+    seg1 = (r1[s1], r1[(s1 + 1) % len(r1)])
+    seg2 = (r2[s2], r2[(s2 + 1) % len(r2)])
+    assert (k1, s1) != (k2, s2)
+    assert segments_meet(*seg1, *seg2), f"{message}: {seg1} and {seg2} do not meet"
+
+
+def raises_geometry(loops) -> str:
+    with pytest.raises(GeometryError) as info:
+        Domain.from_loops(loops)
+    return str(info.value)
+
+
+# --- validation: one case per error -------------------------------------------------
+
+
+def test_too_few_nodes_names_the_loop():
+    message = raises_geometry([SQUARE, [(1.0, 1.0), (2.0, 2.0)]])
+    assert message.startswith("loop 1 (hole 1) has 2 distinct nodes")
+
+
+def test_closing_repeat_is_dropped_but_too_short_loop_still_rejected():
+    domain = Domain.from_loops([SQUARE + [SQUARE[0]]])
+    assert len(domain.points) == 4
+    message = raises_geometry([[(0.0, 0.0), (1.0, 0.0), (0.0, 0.0)]])
+    assert "loop 0 (outer) has 2 distinct nodes" in message
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
+def test_non_finite_coordinate_names_loop_and_node(bad):
+    hole = [(1.0, 1.0), (1.0, 2.0), (2.0, bad), (2.0, 1.0)]
+    assert (
+        raises_geometry([SQUARE, hole]) == "loop 1 (hole 1) has a non-finite coordinate at node 2"
+    )
+
+
+def test_coordinate_out_of_safe_range_is_rejected():
+    message = raises_geometry([[(0.0, 0.0), (1e200, 0.0), (0.0, 1.0)]])
+    assert message.startswith("loop 0 (outer) node 1 has a coordinate of magnitude 1e+200")
+
+
+def test_wrong_shape_and_empty_input():
+    assert "must be an (n, 2) array" in raises_geometry([np.zeros((4, 3))])
+    assert "at least one loop" in raises_geometry([])
+    assert "wrap a single outer loop" in raises_geometry(np.array(SQUARE))
+
+
+def test_repeated_consecutive_node_names_the_zero_length_segment():
+    outer = [(0.0, 0.0), (4.0, 0.0), (4.0, 4.0), (4.0, 4.0), (0.0, 4.0)]
+    message = raises_geometry([outer])
+    assert message.startswith("loop 0 (outer) segment 2 has zero length: nodes 2 and 3 coincide")
+
+
+def test_collinear_loop_has_zero_area():
+    assert raises_geometry([[(0.0, 0.0), (1.0, 1.0), (3.0, 3.0)]]) == (
+        "loop 0 (outer) has zero area: all its nodes are collinear"
+    )
+
+
+def test_bow_tie_names_the_two_crossing_segments():
+    bow_tie = [(0.0, 0.0), (1.0, 1.0), (1.0, 0.0), (0.0, 1.0)]
+    assert raises_geometry([bow_tie]) == "loop 0 (outer) segment 2 crosses loop 0 (outer) segment 0"
+
+
+def test_fold_back_overlap():
+    loop = [(0.0, 0.0), (2.0, 0.0), (1.0, 0.0), (1.0, 1.0)]
+    message = raises_geometry([loop])
+    assert "overlaps" in message
+    assert_names_meeting_segments(message, [loop])
+
+
+def test_loop_touching_itself():
+    loop = [(0.0, 0.0), (4.0, 0.0), (4.0, 4.0), (2.0, 0.0), (0.0, 4.0)]
+    message = raises_geometry([loop])
+    assert "touches" in message
+    assert_names_meeting_segments(message, [loop])
+
+
+def test_hole_crossing_outer_names_both_loops():
+    hole = [(3.0, 1.0), (5.0, 2.0), (3.0, 3.0)]
+    message = raises_geometry([SQUARE, hole])
+    assert message in {
+        "loop 1 (hole 1) segment 0 crosses loop 0 (outer) segment 1",
+        "loop 1 (hole 1) segment 1 crosses loop 0 (outer) segment 1",
+    }
+
+
+def test_hole_touching_outer_at_a_vertex():
+    hole = [(4.0, 2.0), (3.0, 1.0), (3.0, 3.0)][::-1]
+    message = raises_geometry([SQUARE, hole])
+    assert "touches" in message
+    assert_names_meeting_segments(message, [SQUARE, hole])
+
+
+def test_hole_outside_outer():
+    far = [(10.0, 10.0), (11.0, 10.0), (11.0, 11.0)]
+    assert raises_geometry([SQUARE, SMALL_HOLE, far]).startswith(
+        "loop 2 (hole 2) lies outside the outer loop"
+    )
+
+
+def test_outer_given_after_its_hole_is_reported():
+    message = raises_geometry([SMALL_HOLE, SQUARE])
+    assert message.startswith("loop 1 (hole 1) lies outside the outer loop")
+    assert "first loop must be the outer boundary" in message
+
+
+def test_hole_inside_another_hole():
+    big = [(0.5, 0.5), (3.5, 0.5), (3.5, 3.5), (0.5, 3.5)]
+    message = raises_geometry([SQUARE, big, SMALL_HOLE])
+    assert message == "loop 2 (hole 2) lies inside loop 1 (hole 1); nested holes are not supported"
+
+
+def test_overlapping_holes():
+    other = [(1.5, 1.5), (3.0, 1.5), (3.0, 3.0), (1.5, 3.0)]
+    message = raises_geometry([SQUARE, SMALL_HOLE, other])
+    assert message.startswith("loop 2 (hole 2) segment")
+    assert "loop 1 (hole 1) segment" in message
+    assert_names_meeting_segments(message, [SQUARE, SMALL_HOLE, other])
+
+
+def test_holes_sharing_a_vertex_touch():
+    first = [(1.0, 1.0), (2.0, 1.0), (2.0, 2.0)]
+    second = [(2.0, 2.0), (3.0, 2.0), (3.0, 3.0)]
+    message = raises_geometry([SQUARE, first, second])
+    assert "touches" in message
+    assert_names_meeting_segments(message, [SQUARE, first, second])
+
+
+def test_crossing_far_along_a_long_boundary_is_found():
+    n = 12_000
+    t = 2 * np.pi * np.arange(n) / n
+    circle = np.column_stack([np.cos(t), np.sin(t)])
+    i = 7_321
+    circle[[i, i + 1]] = circle[[i + 1, i]]
+    message = raises_geometry([circle])
+    assert message == f"loop 0 (outer) segment {i + 1} crosses loop 0 (outer) segment {i - 1}"
+
+
+# --- validation against the exact oracle on a small grid (many degeneracies) --------
+
+grid_loop = st.lists(
+    st.tuples(st.integers(0, 4), st.integers(0, 4)).map(lambda p: (float(p[0]), float(p[1]))),
+    min_size=3,
+    max_size=7,
+)
+
+
+@budget(300)
+@given(grid_loop)
+def test_single_loop_accepted_iff_simple(loop):
+    invalid = loop_problem(loop)
+    if invalid:
+        message = raises_geometry([loop])
+        assert message.startswith("loop 0 (outer)")
+        if CONFLICT.search(message):
+            assert_names_meeting_segments(message, [loop])
+        return
+    domain = Domain.from_loops([loop])
+    assert signed_area(domain.points[domain.loops[0]].tolist()) > 0
+    assert domain.area == pytest.approx(float(abs(signed_area(loop))), rel=1e-15)
+
+
+def star_ordered(points):
+    """Distinct points sorted by angle around their mean: usually a simple loop."""
+    points = sorted(set(points))
+    cx = sum(p[0] for p in points) / len(points)
+    cy = sum(p[1] for p in points) / len(points)
+    return sorted(points, key=lambda p: math.atan2(p[1] - cy, p[0] - cx))
+
+
+def star_loop(low, high, offset):
+    coordinate = st.integers(low, high).map(lambda v: v + offset)
+    return st.lists(st.tuples(coordinate, coordinate), min_size=3, max_size=8).map(star_ordered)
+
+
+@budget(300)
+@given(star_loop(0, 8, 0.0), star_loop(1, 6, 0.5))
+def test_outer_and_hole_accepted_iff_valid(outer, hole):
+    assume(not loop_problem(outer) and not loop_problem(hole))
+    meet = loops_meet(outer, hole)
+    valid = not meet and strictly_inside(hole[0], outer)
+    if not valid:
+        message = raises_geometry([outer, hole])
+        if meet:
+            assert_names_meeting_segments(message, [outer, hole])
+        else:
+            assert message.startswith("loop 1 (hole 1) lies outside the outer loop")
+        return
+    domain = Domain.from_loops([outer, hole])
+    expected = abs(signed_area(outer)) - abs(signed_area(hole))
+    assert domain.area == pytest.approx(float(expected), rel=1e-14)
+    assert strictly_inside(tuple(domain.hole_points[0]), hole)
+
+
+# --- orientation, layout and derived quantities ----------------------------------------
+
+
+@budget(60)
+@given(domains(), st.data())
+def test_orientation_is_normalised_whatever_the_input_orientation(case, data):
+    flips = data.draw(st.lists(st.booleans(), min_size=len(case.loops), max_size=len(case.loops)))
+    loops = [ring[::-1] if flip else ring for ring, flip in zip(case.loops, flips)]
+    domain = Domain.from_loops(loops)
+    np.testing.assert_array_equal(domain.points, np.vstack(loops))
+    for k, index in enumerate(domain.loops):
+        area = signed_area(domain.points[index].tolist())
+        assert (area > 0) if k == 0 else (area < 0)
+        # each loop starts at the node the user gave first
+        assert index[0] == sum(len(ring) for ring in loops[:k])
+        assert sorted(index.tolist()) == list(range(index[0], index[0] + len(loops[k])))
+    # segments chain each loop's nodes in the loop's oriented order
+    expected = np.concatenate([np.column_stack([ix, np.roll(ix, -1)]) for ix in domain.loops])
+    np.testing.assert_array_equal(domain.segments, expected)
+    for a, b in domain.segments[
+        :3
+    ].tolist():  # consecutive in the user's ring, one way or the other
+        assert abs(a - b) == 1 or {a, b} & {int(ix[0]) for ix in domain.loops}
+
+
+@budget(40)
+@given(domains())
+def test_segments_agree_with_an_independent_orientation(case):
+    domain = Domain.from_loops(case.loops)
+    np.testing.assert_array_equal(
+        np.sort(domain.segments, axis=0), np.sort(case.segments(), axis=0)
+    )
+
+
+def test_arrays_are_read_only_and_typed():
+    domain = Domain.from_loops([SQUARE, SMALL_HOLE])
+    assert domain.points.dtype == np.float64 and domain.points.shape == (8, 2)
+    assert domain.segments.dtype == np.int64 and domain.segments.shape == (8, 2)
+    assert domain.hole_points.shape == (1, 2)
+    with pytest.raises(ValueError):
+        domain.points[0, 0] = 1.0
+    assert repr(domain) == "Domain(nodes=8, holes=1, area=15)"
+
+
+@budget(60)
+@given(domains())
+def test_area_and_hole_points_against_shapely(case):
+    shapely = pytest.importorskip("shapely")
+    from shapely.geometry import Point, Polygon
+
+    domain = Domain.from_loops(case.loops)
+    polygon = Polygon(case.loops[0], [ring for ring in case.loops[1:]])
+    assert polygon.is_valid
+    assert domain.area == pytest.approx(polygon.area, rel=1e-12)
+    assert len(domain.hole_points) == len(case.loops) - 1
+    for ring, point in zip(case.loops[1:], domain.hole_points):
+        assert Polygon(ring).contains(Point(point))
+        assert not polygon.intersects(Point(point))
+    assert shapely is not None
+
+
+def test_hole_point_of_a_thin_non_convex_hole():
+    # a comb: the vertex centroid lies outside it, the scan line finds a tooth
+    comb = [
+        (1.0, 1.0),
+        (3.0, 1.0),
+        (3.0, 3.0),
+        (2.9, 3.0),
+        (2.9, 1.1),
+        (1.1, 1.1),
+        (1.1, 3.0),
+        (1.0, 3.0),
+    ]
+    domain = Domain.from_loops([SQUARE, comb])
+    assert strictly_inside(tuple(domain.hole_points[0]), comb)
+
+
+@pytest.mark.slow
+def test_large_boundary_validates_quickly():
+    import time
+
+    n = 50_000
+    t = 2 * np.pi * np.arange(n) / n
+    circle = np.column_stack([np.cos(t), np.sin(t)])
+    Domain.from_loops([circle[::500], 0.5 * circle[::500]])  # compile outside the timing
+    start = time.perf_counter()
+    domain = Domain.from_loops([circle, 0.5 * circle])
+    assert time.perf_counter() - start < 5.0
+    assert domain.area == pytest.approx(0.75 * np.pi, rel=1e-6)
+
+
+# --- .poly ------------------------------------------------------------------------------
+
+
+POLY_ONE_BASED = """\
+# a square with a square hole; numbered from 1, attributes and markers present
+8 2 1 1
+1 0 0   0.5 1
+2 4 0   0.5 1
+3 4 4   0.5 1  # trailing comment
+4 0 4   0.5 1
+
+5 1 1   0.5 2
+6 2 1   0.5 2
+7 2 2   0.5 2
+8 1 2   0.5 2
+8 1
+1 1 2 1
+2 3 2 1
+3 3 4 1
+4 1 4 1
+5 5 6 2
+6 7 6 2
+7 7 8 2
+8 5 8 2
+1
+1 1.5 1.5
+"""
+
+
+def test_from_poly_one_based_with_attributes_markers_and_comments(tmp_path):
+    path = tmp_path / "square.poly"
+    path.write_text(POLY_ONE_BASED)
+    domain = Domain.from_poly(path)
+    np.testing.assert_array_equal(domain.points[:4], SQUARE)
+    assert domain.area == 15.0
+    assert [ix.tolist() for ix in domain.loops] == [[0, 1, 2, 3], [4, 7, 6, 5]]
+
+
+def test_from_poly_zero_based_hole_loop_listed_first(tmp_path):
+    path = tmp_path / "zero.poly"
+    path.write_text(
+        "8 2 0 0\n0 1 1\n1 2 1\n2 2 2\n3 1 2\n4 0 0\n5 4 0\n6 4 4\n7 0 4\n"
+        "8 0\n0 0 1\n1 1 2\n2 2 3\n3 3 0\n4 4 5\n5 5 6\n6 6 7\n7 7 4\n0\n"
+    )
+    domain = Domain.from_poly(path)  # no hole points: the nested loop is the hole
+    np.testing.assert_array_equal(domain.points[:4], SQUARE)
+    assert domain.area == 15.0
+    assert strictly_inside(tuple(domain.hole_points[0]), SMALL_HOLE)
+
+
+def test_from_poly_reads_a_node_file_when_vertex_count_is_zero(tmp_path):
+    (tmp_path / "t.node").write_text("3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n")
+    (tmp_path / "t.poly").write_text("0 2 0 0\n3 0\n1 1 2\n2 2 3\n3 3 1\n0\n")
+    assert Domain.from_poly(tmp_path / "t.poly").area == 0.5
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("4 2 0 0\n1 0 0\n2 1 0\n3 0 1\n4 5 5\n3 0\n1 1 2\n2 2 3\n3 3 1\n",
+         "vertex 4 at (5.0, 5.0) is on no segment"),
+        ("4 2 0 0\n1 0 0\n2 1 0\n3 0 1\n4 1 1\n4 0\n1 1 2\n2 2 3\n3 3 1\n4 1 4\n",
+         "vertex 1 at (0.0, 0.0) ends 3 segments"),
+        ("3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n3 0\n1 1 2\n2 2 2\n3 3 1\n",
+         "segment 2 joins vertex 2 at (1.0, 0.0) to itself"),
+        ("3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n3 0\n1 1 2\n2 2 4\n3 3 1\n",
+         "segment 2 names a vertex that does not exist"),
+        ("3 2 0 0\n1 0 0\n3 1 0\n4 0 1\n", "vertex 3 where 2 was expected"),
+        ("3 2 0 0\n1 0 0\n2 1 0\n", "file ends where a vertex was expected"),
+        ("3 2 0 0\n1 0 0\n2 one 0\n3 0 1\n", "line 3: bad number in a vertex"),
+    ],
+)  # fmt: skip
+def test_from_poly_file_errors(tmp_path, text, expected):
+    path = tmp_path / "bad.poly"
+    path.write_text(text)
+    with pytest.raises(GeometryError, match=re.escape(expected)):
+        Domain.from_poly(path)
+
+
+def test_from_poly_inner_loop_without_hole_point_is_a_constraint_loop(tmp_path):
+    second = [(2.5, 2.5), (3.5, 2.5), (3.5, 3.5), (2.5, 3.5)]
+    Domain.from_loops([SQUARE, SMALL_HOLE, second]).to_poly(tmp_path / "three.poly")
+    text = (tmp_path / "three.poly").read_text()
+    head, _holes = text.rsplit("\n2\n", 1)  # keep only the first hole point
+    (tmp_path / "three.poly").write_text(head + "\n1\n1 1.5 1.5\n")
+    with pytest.raises(GeometryError, match="vertex 9 contains no hole point; internal constraint"):
+        Domain.from_poly(tmp_path / "three.poly")
+
+
+def test_from_poly_hole_point_in_the_domain_is_rejected(tmp_path):
+    path = tmp_path / "h.poly"
+    path.write_text(POLY_ONE_BASED.replace("1 1.5 1.5", "1 3.0 3.0"))
+    with pytest.raises(GeometryError, match=r"hole point 1 at \(3.0, 3.0\) lies in the domain"):
+        Domain.from_poly(path)
+
+
+def test_from_poly_hole_point_on_a_hole_boundary_is_rejected(tmp_path):
+    path = tmp_path / "h.poly"
+    path.write_text(POLY_ONE_BASED.replace("1 1.5 1.5", "1 1.5 2.0"))
+    with pytest.raises(
+        GeometryError, match=r"hole point 1 at \(1.5, 2.0\) lies on loop 1 \(hole 1\)"
+    ):
+        Domain.from_poly(path)
+
+
+def test_from_poly_names_file_loop_starts_on_geometry_errors(tmp_path):
+    path = tmp_path / "x.poly"
+    path.write_text(POLY_ONE_BASED.replace("6 2 1   0.5 2", "6 5 1.5 0.5 2"))
+    with pytest.raises(GeometryError) as info:
+        Domain.from_poly(path)
+    message = str(info.value)
+    assert re.search(r"loop 1 \(hole 1\) segment [01] crosses loop 0 \(outer\) segment 1", message)
+    assert message.startswith(str(path))
+    assert message.endswith("(loop 0 starts at vertex 1, loop 1 starts at vertex 5)")
+
+
+@budget(40)
+@given(domains())
+def test_poly_round_trip_is_exact(tmp_path_factory, case):
+    path = tmp_path_factory.mktemp("poly") / "d.poly"
+    domain = Domain.from_loops(case.loops)
+    domain.to_poly(path)
+    again = Domain.from_poly(path)
+    np.testing.assert_array_equal(again.points, domain.points)
+    np.testing.assert_array_equal(again.segments, domain.segments)
+    np.testing.assert_array_equal(again.hole_points, domain.hole_points)
+    assert again.area == domain.area
+
+
+# --- shapely ----------------------------------------------------------------------------
+
+
+def test_from_shapely_keeps_ring_vertices_and_holes():
+    pytest.importorskip("shapely")
+    from shapely.geometry import Polygon
+
+    domain = Domain.from_shapely(Polygon(SQUARE, [SMALL_HOLE]))
+    assert len(domain.points) == 8  # shapely's closing repeats dropped
+    assert domain.area == 15.0
+
+
+def test_from_shapely_spacing_splits_edges_and_keeps_corners():
+    pytest.importorskip("shapely")
+    from shapely.geometry import Polygon
+
+    outer = [(0.0, 0.0), (3.0, 0.0), (3.0, 1.0), (0.0, 1.0)]
+    domain = Domain.from_shapely(Polygon(outer), spacing=0.4)
+    # ceil(3/0.4) = 8 pieces on the long edges, ceil(1/0.4) = 3 on the short ones
+    assert len(domain.points) == 2 * 8 + 2 * 3
+    for corner in outer:
+        assert (domain.points == corner).all(axis=1).any()
+    lengths = np.hypot(
+        *np.diff(domain.points[np.r_[domain.loops[0], domain.loops[0][0]]], axis=0).T
+    )
+    assert lengths.max() <= 0.4
+    assert sorted(set(np.round(lengths, 12))) == [pytest.approx(1 / 3), pytest.approx(3 / 8)]
+
+
+def test_from_shapely_multipolygon():
+    pytest.importorskip("shapely")
+    from shapely.geometry import MultiPolygon, Polygon
+
+    assert Domain.from_shapely(MultiPolygon([Polygon(SQUARE)])).area == 16.0
+    two = MultiPolygon([Polygon(SMALL_HOLE), Polygon([(5, 5), (6, 5), (6, 6)])])
+    with pytest.raises(GeometryError, match="MultiPolygon with 2 parts"):
+        Domain.from_shapely(two)
+    with pytest.raises(ValueError, match="spacing"):
+        Domain.from_shapely(Polygon(SQUARE), spacing=0.0)
+
+
+def test_from_shapely_without_shapely_says_how_to_install(monkeypatch):
+    monkeypatch.setitem(sys.modules, "shapely", None)
+    monkeypatch.setitem(sys.modules, "shapely.geometry", None)
+    with pytest.raises(ImportError, match=r"pip install 'bubblemesh\[shapely\]'"):
+        Domain.from_shapely(object())
