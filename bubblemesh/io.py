@@ -206,6 +206,6 @@ def write_mesh(
         point_data={name: np.asarray(v) for name, v in (point_data or {}).items()},
         cell_data=cells,
     )
-    # meshio's ASCII Gmsh writer prints numpy 2 scalars as "np.float64(...)": stay binary
-    options = {"xdmf": {"data_format": "XML"}}.get(file_format, {})
+    # (Gmsh stays binary: meshio's ASCII writer prints numpy 2 scalars as "np.float64(...)")
+    options = {"data_format": "XML"} if file_format == "xdmf" else {}
     meshio.write(path, mesh, file_format=file_format, **options)
