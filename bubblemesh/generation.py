@@ -50,7 +50,7 @@ CHUNK_DONE = 4  # a progress chunk is done: the caller reports and resumes
 ERR_EMPTY_QUEUE = -20
 
 # integer state slots
-S_NPTS, S_NTRI, S_HEAP, S_INSERTIONS, S_STAMP = range(5)
+S_NPTS, S_NTRI, S_HEAP, S_INSERTIONS, S_STAMP, S_CAVITY = range(6)
 
 
 # --- 4-ary heap of (key, id) rows in one array, ordered by key then id -------------------
@@ -215,6 +215,7 @@ def insertion_loop(
         # (e) Bowyer-Watson insertion from t
         state[S_STAMP] += 1
         ncav, nb = find_cavity(P, ex, ey, t, tri, nbr, con, mark, state[S_STAMP], cav, bnd)
+        state[S_CAVITY] += ncav
         if ntri + nb - ncav > tri.shape[0] or size + nb > heap.shape[0]:
             size = heap_push(heap, size, density[t], t)  # put t back: retried first
             status = NEED_CAPACITY
@@ -320,7 +321,7 @@ def generate(domain, *, max_insertions=None, progress=False):
     t_cap = max(64, int(1.1 * expected) + 2 * len(tri))
     ws = _Workspace(points, radii, tri, nbr, len(points) + t_cap // 2 + 16, t_cap)
     acc = np.zeros(2)
-    state = np.zeros(5, np.int64)
+    state = np.zeros(6, np.int64)
     state[S_NPTS] = len(points)
     state[S_NTRI] = len(tri)
     state[S_HEAP] = init_queue(ws.P, ws.R, ws.tri, len(tri), ws.r_e, ws.a_e, ws.density,
@@ -393,6 +394,7 @@ def _as_mesh(domain, ws, state, acc, boundary, status, seconds):
     )
     stats = {
         "insertions": int(state[S_INSERTIONS]),
+        "cavity_triangles": int(state[S_CAVITY]),
         "bubble_area": float(acc[0] + acc[1]),
         "domain_area": float(domain.area),
         "stop": "population" if status == STOP_POPULATION else "max_insertions",
