@@ -139,18 +139,13 @@ def _child_triangle(n, repeats, target):
     from cases import peers
 
     loops = _disk(n)
-    tr.triangulate(
-        {
-            "vertices": loops[0][:12].copy(),
-            "segments": np.c_[np.arange(12), (np.arange(12) + 1) % 12],
-        },
-        "pq30a0.5YQ",
-    )  # warm-up
+    pts, segs = peers._segments(_disk(12))
+    tr.triangulate({"vertices": pts, "segments": segs}, "pq30a0.05YQ")  # warm-up
     pts, segs = peers._segments(loops)
     data = {"vertices": pts, "segments": segs}
     area, best = np.pi / target, None
     for _ in range(4):  # untimed tuning of the area bound to the element count
-        ne = len(tr.triangulate(data, f"pq30a{area:.6g}YQ")["triangles"])
+        ne = len(tr.triangulate(data, f"pq30a{peers.triangle_number(area)}YQ")["triangles"])
         if best is None or abs(np.log(ne / target)) < abs(np.log(best[1] / target)):
             best = (area, ne)
         area *= ne / target
@@ -159,7 +154,7 @@ def _child_triangle(n, repeats, target):
     times = []
     for _ in range(repeats):
         t0 = time.perf_counter()
-        out = tr.triangulate(data, f"pq30a{area:.6g}YQ")
+        out = tr.triangulate(data, f"pq30a{peers.triangle_number(area)}YQ")
         times.append(time.perf_counter() - t0)
     peak = _rss_mb()
     return [
@@ -169,7 +164,7 @@ def _child_triangle(n, repeats, target):
             seconds=min(times),
             peak_mb=peak,
             peak_delta_mb=peak - base,
-            note=f"pq30a{area:.6g}YQ",
+            note=f"pq30a{peers.triangle_number(area)}YQ",
         )
     ]
 
@@ -327,6 +322,7 @@ def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress
     repeats = 1 if quick else repeats
     gmsh_cap = 1_000 if quick else GMSH_CAP
     t_start = time.perf_counter()
+    load_start = os.getloadavg()
     rows = []
     for target in tqdm(
         targets, desc="benchmark", unit="size", disable=not progress, file=sys.stderr
@@ -363,6 +359,8 @@ def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress
             )
         for r in got:
             r.setdefault("status", "ok")
+            if r["status"] == "ok" and abs(r["elements"] / match - 1) > 0.1:
+                r["note"] = f"COUNT MISMATCH: {r['elements']} vs {match} elements; " + r["note"]
             r["boundary_nodes"], r["repeats"] = n, repeats
             r.setdefault("elements", match if r["status"] != "ok" else None)
         rows += got
@@ -392,6 +390,7 @@ def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress
         "peak_delta_mb above its RSS after warm-up",
         compile=({"skipped": "quick mode"} if quick else compile_times()),
         total_seconds=time.perf_counter() - t_start,
+        load_average_start_end=[round(load_start[0], 2), round(os.getloadavg()[0], 2)],
     )
     (out / "benchmark.json").write_text(json.dumps(meta, indent=2, default=str) + "\n")
     ok = df[df.status == "ok"]

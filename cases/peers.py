@@ -16,9 +16,9 @@ never raises.  On "ok" it also has ``options`` (what was run, in words),
 (largest distance from a given boundary node to the nearest boundary node of
 the result; 0 when the boundary is kept) and ``boundary_nodes``.
 
-``seconds`` is the wall time of the run whose mesh is returned (the last
-tuning run), excluding package start-up; for the post-processors it excludes
-building the §2 input mesh.
+``seconds`` is the wall time of the run whose mesh is returned (the tuning
+run closest to the target), excluding package start-up; for the
+post-processors it excludes building the §2 input mesh.
 
 How each peer is tuned to the same boundary and element count:
 
@@ -79,6 +79,7 @@ __all__ = [
     "run_peer",
     "laplacian_smooth",
     "hole_points",
+    "triangle_number",
     "peer_versions",
 ]
 
@@ -91,7 +92,8 @@ POSTPROCESSORS = (
 )
 PEERS = GENERATORS + POSTPROCESSORS
 
-#: Laplacian smoothing steps for both Laplacian peers.
+#: Laplacian smoothing steps for both Laplacian peers: converged, i.e. on every case the
+#: mean ρ after 20 steps is within 0.001 of its value after 200 (measured on the §2 meshes).
 LAPLACIAN_STEPS = 20
 #: Runs spent matching the target element count (the closest is kept).
 TUNING_RUNS = 3
@@ -145,6 +147,14 @@ def _inverted(points: np.ndarray, tri: np.ndarray) -> int:
     return int((area2 <= 0).sum())
 
 
+def triangle_number(x: float) -> str:
+    """``x`` with 6 significant digits and no exponent: Triangle's switch parser reads only
+    digits and '.', so 'a3.1e-05' would mean area bound 3.1 followed by switch 'e'."""
+    return np.format_float_positional(
+        float(x), precision=6, unique=False, fractional=False, trim="-"
+    )
+
+
 def _skip(reason: str, status: str = "skipped"):
     return None, None, float("nan"), {"status": status, "reason": reason}
 
@@ -168,7 +178,7 @@ def _triangle(loops, target):
     area = _domain_area(loops) / target
     runs = []
     for _ in range(TUNING_RUNS):
-        opts = f"pq{TRIANGLE_MIN_ANGLE}a{area:.6g}YQ"
+        opts = f"pq{TRIANGLE_MIN_ANGLE}a{triangle_number(area)}YQ"
         t0 = time.perf_counter()
         out = tr.triangulate(data, opts)
         sec = time.perf_counter() - t0

@@ -21,8 +21,7 @@ _SAVE = dict(dpi=110, bbox_inches="tight", metadata={"Software": None})
 
 
 def _save(fig, path):
-    """Save as a palette PNG (Pillow quantization: ~4x smaller, the report is committed), then "
-    "close."""
+    """Save as a palette PNG (Pillow quantization: ~4x smaller; the report is committed)."""
     import io
 
     buf = io.BytesIO()

@@ -62,86 +62,75 @@ def ranking(df):
     return g.sort_values(["avg_rank_by_mean", "rho_mean"], ascending=[True, False]).reset_index()
 
 
+def _n(count, word="element"):
+    count = int(count)
+    return f"{count} {word}" + ("" if count == 1 else "s")
+
+
 def findings(df, labels=None):
-    """Plain-language findings as (kind, sentence) with kind in agree/disagree/info, from the "
-    "data."""
+    """Plain-language findings, (kind, sentence) with kind agree/disagree/info, from the data."""
     labels = labels or {}
     lab = lambda m: labels.get(m, m)  # noqa: E731
     out = []
     for case in dict.fromkeys(df["case"]):
         d, o = _get(df, case, "bubblemesh_delaunay"), _get(df, case, "bubblemesh_optimized")
         if d is None or o is None:
-            out.append(
-                (
-                    "disagree",
-                    f"{case}: bubblemesh did not produce both meshes, so the paper's result "
-                    f"could not be checked.",
-                )
+            msg = (
+                f"{case}: bubblemesh did not produce both meshes; the paper's result is unchecked."
             )
+            out.append(("disagree", msg))
             continue
         up = o.rho_mean - d.rho_mean
-        fewer = o.n_below_0_7 <= MUCH_BETTER_PCT * d.n_below_0_7
         base = (
-            f"{case}: optimization took mean ρ from {d.rho_mean:.3f} to {o.rho_mean:.3f} and the "
+            f"{case}: optimization took mean ρ from {d.rho_mean:.3f} to {o.rho_mean:.3f}, the "
             f"elements below 0.7 from {d.n_below_0_7} ({d.pct_below_0_7:.1f}%) to {o.n_below_0_7} "
-            f"({o.pct_below_0_7:.1f}%), minimum ρ {d.rho_min:.3f} → {o.rho_min:.3f}"
+            f"({o.pct_below_0_7:.1f}%) and the minimum ρ from {d.rho_min:.3f} to {o.rho_min:.3f}"
         )
-        if up >= MUCH_BETTER_MEAN and fewer:
-            out.append(("agree", base + " — much better, as the paper reports."))
+        if up >= MUCH_BETTER_MEAN and o.n_below_0_7 <= MUCH_BETTER_PCT * d.n_below_0_7:
+            out.append(("agree", base + ": much better, as the paper reports."))
         elif up > 0 and o.n_below_0_7 < d.n_below_0_7:
             out.append(
                 (
                     "disagree",
-                    base + ' — better, but by less than the paper\'s "high-quality" result '
-                    f"suggests (our bar: mean +{MUCH_BETTER_MEAN}, low elements halved).",
+                    base + ": better, but less than the paper's 'much better' "
+                    f"(our bar: mean ρ +{MUCH_BETTER_MEAN} and the low elements halved).",
                 )
             )
         else:
-            out.append(("disagree", base + " — no improvement, unlike the paper."))
+            out.append(("disagree", base + ": no improvement, unlike the paper."))
+        low = f"{_n(o.n_below_0_7)} of the optimized mesh stay below 0.7 ({o.pct_below_0_7:.1f}%)"
         if case in FEW_LOW:
             if o.n_below_0_7 == 0:
                 out.append(
                     (
                         "disagree",
-                        f"{case}: the paper keeps a few elements below 0.7 here; ours has none "
-                        f"(better than reported).",
+                        f"{case}: the paper keeps a few elements below 0.7 here; "
+                        "ours keeps none (better than reported).",
                     )
                 )
             elif o.pct_below_0_7 <= FEW_PCT:
-                out.append(
-                    (
-                        "agree",
-                        f"{case}: {o.n_below_0_7} optimized elements stay below 0.7 "
-                        f'({o.pct_below_0_7:.1f}%), the "few" the paper reports.',
-                    )
-                )
+                out.append(("agree", f"{case}: {low}, the few the paper reports for this figure."))
             else:
-                out.append(
-                    (
-                        "disagree",
-                        f"{case}: {o.n_below_0_7} optimized elements stay below 0.7 "
-                        f'({o.pct_below_0_7:.1f}%), more than the paper\'s "few".',
-                    )
-                )
+                out.append(("disagree", f"{case}: {low}, more than the paper's few."))
         elif case in PAPER:
             kind = "agree" if o.pct_below_0_7 <= FEW_PCT else "disagree"
             out.append(
                 (
                     kind,
-                    f"{case}: {o.n_below_0_7} optimized elements below 0.7 "
-                    f"({o.pct_below_0_7:.1f}%); "
-                    f"the paper singles out only Figs. 4–5 for low elements.",
+                    f"{case}: {low}; the paper singles out only Figs. 4–5 for low "
+                    "elements, so it implies at most a few here.",
                 )
             )
         g = _get(df, case, "gmsh_frontal")
         if g is not None:
-            cmp_ = "above" if o.rho_mean > g.rho_mean else "below"
+            cmp_ = "higher" if o.rho_mean > g.rho_mean else "lower"
             out.append(
                 (
                     "info",
-                    f"{case}: bubblemesh optimized mean ρ {o.rho_mean:.3f} is {cmp_} Gmsh "
-                    f"Frontal-Delaunay's {g.rho_mean:.3f} ({g.elements} vs {o.elements} elements; "
-                    f"{g.n_below_0_7} vs {o.n_below_0_7} below 0.7).",
+                    f"{case}: bubblemesh's optimized mean ρ {o.rho_mean:.3f} "
+                    f"({o.elements} elements, {o.n_below_0_7} below 0.7) is {cmp_} than "
+                    f"Gmsh Frontal-Delaunay's {g.rho_mean:.3f} ({g.elements} elements, "
+                    f"{g.n_below_0_7} below 0.7).",
                 )
             )
     ok = _ok(df)
@@ -150,21 +139,48 @@ def findings(df, labels=None):
         out.append(
             (
                 "info",
-                f"{r.case}: {lab(r.method)} moved boundary nodes by up to {r.boundary_shift:.3g} "
-                f"({r.boundary_nodes} boundary nodes in its mesh).",
+                f"{r.case}: {lab(r.method)} moved boundary nodes by up to "
+                f"{r.boundary_shift:.3g} ({r.boundary_nodes} boundary nodes in its mesh).",
             )
         )
     if moved.empty and not ok.empty:
+        out.append(("info", "Every method kept every boundary node exactly."))
+    elif not ok.empty:
+        kept = sorted({lab(m) for m in ok.method} - {lab(m) for m in moved.method})
         out.append(
             (
                 "info",
-                "Every method kept every boundary node exactly (boundary shift 0 in all meshes).",
+                "Every other method kept every boundary node exactly: " + ", ".join(kept) + ".",
             )
         )
-    inv = ok[ok["inverted"] > 0]
-    for _, r in inv.iterrows():
+    for _, r in ok[ok["inverted"] > 0].iterrows():
         out.append(
-            ("info", f"{r.case}: {lab(r.method)} has {r.inverted} inverted or zero-area elements.")
+            ("info", f"{r.case}: {lab(r.method)} has {_n(r.inverted, 'inverted or flat element')}.")
+        )
+    ref = ok[ok.method == "bubblemesh_delaunay"].set_index("case")["elements"]
+    if not ref.empty:
+        dev = (ok.elements / ok.case.map(ref) - 1).abs()
+        dev = dev[ok.method != "bubblemesh_delaunay"].dropna()
+        if len(dev):
+            out.append(
+                (
+                    "info",
+                    f"Element counts are matched to the §2 mesh within "
+                    f"{100 * dev.max():.1f}% (median {100 * dev.median():.1f}%).",
+                )
+            )
+    lp = ok[ok.method == "laplacian_pymeshlab"].set_index("case")["rho_mean"]
+    lu = ok[ok.method == "laplacian_uniform"].set_index("case")["rho_mean"]
+    both = lp.index.intersection(lu.index)
+    if len(both):
+        gap = float((lp[both] - lu[both]).abs().max())
+        out.append(
+            (
+                "info",
+                f"pymeshlab's Laplacian and the plain uniform one differ by at most "
+                f"{gap:.4f} in mean ρ over the cases (their updates differ by a self "
+                "weight; both converge to the same fixed point).",
+            )
         )
     rk = ranking(df)
     if not rk.empty:
@@ -175,18 +191,9 @@ def findings(df, labels=None):
         by_low = ", ".join(
             f"{lab(m)} ({v:.1f}%)" for m, v in zip(low.method, low.pct_below_0_7, strict=True)
         )
-        out.append(
-            (
-                "info",
-                "Ranking by mean ρ (average rank over the cases; mean of the cases' means): "
-                f"{by_mean}.",
-            )
-        )
-        out.append(
-            ("info", f"Ranking by share of elements below 0.7 (average rank; mean %): {by_low}.")
-        )
-    skipped = df[df["status"] != "ok"]
-    for _, r in skipped.iterrows():
+        out.append(("info", f"Ranking by mean ρ (average rank over the cases): {by_mean}."))
+        out.append(("info", f"Ranking by share of elements below 0.7 (average rank): {by_low}."))
+    for _, r in df[df["status"] != "ok"].iterrows():
         out.append(("info", f"{r.case}: {lab(r.method)} {r.status}: {r.reason}"))
     return out
 
@@ -284,7 +291,7 @@ def _rank_table(df, labels):
 
 
 def _benchmark(out: Path):
-    """(header, rows, png name, notes) of benchmark.csv when present."""
+    """(header, rows, png name, notes) of benchmark.csv / benchmark.json when present."""
     import pandas as pd
 
     csv = out / "benchmark.csv"
@@ -297,7 +304,46 @@ def _benchmark(out: Path):
         for r in b.values
     ]
     png = "figures/benchmark.png" if (out / "figures" / "benchmark.png").exists() else None
-    return header, rows, png
+    return header, rows, png, _benchmark_notes(out)
+
+
+def _benchmark_notes(out: Path) -> list[str]:
+    """Sentences from benchmark.json: when and where it ran, slopes, compile times, caps."""
+    import json
+
+    path = out / "benchmark.json"
+    if not path.exists():
+        return []
+    m = json.loads(path.read_text())
+    notes = [
+        f"Run {m.get('date')} on {m.get('platform')}, {m.get('cpu')}, {m.get('cpu_count')} CPUs"
+        + (" (quick mode)" if m.get("quick") else "")
+        + f"; minimum of {m.get('repeats')} repeats after a warm-up; "
+        f"{m.get('total_seconds', float('nan')):.0f} s in all; 1-minute load average "
+        f"{m.get('load_average_start_end')} at start/end (other jobs share the machine).",
+        f"Memory: {m.get('memory')}.",
+        f"Gmsh Frontal-Delaunay is run only up to {m.get('gmsh_cap')} elements (far slower); "
+        "the rows above that say skipped.",
+    ]
+    slopes = m.get("loglog_slopes", {})
+    if slopes:
+        s = ", ".join(f"{k} {v:.3f}" for k, v in slopes.items() if v == v)
+        if s:
+            notes.append(
+                f"Fitted log-log slope of seconds vs elements (sizes >= "
+                f"{m.get('slope_from_elements')} elements): {s}."
+            )
+    c = m.get("compile", {})
+    if "cold_first_call_s" in c:
+        notes.append(
+            f"numba: first generate+optimize in a fresh process takes "
+            f"{c['cold_first_call_s']:.1f} s with an empty cache (compile) and "
+            f"{c.get('warm_first_call_s', float('nan')):.2f} s with the cache filled "
+            f"(import {c.get('warm_import_s', float('nan')):.2f} s)."
+        )
+    elif c:
+        notes.append(f"numba compile time: {c}.")
+    return notes
 
 
 # --------------------------------------------------------------------------- writers
@@ -403,7 +449,7 @@ def write(out: Path, df, figs, meta, case_mods, labels):
         md += ["## Speed benchmark (issue 6)", ""]
         if bench[2]:
             md += [f"![benchmark]({bench[2]})", ""]
-        md += [_md_table(bench[0], bench[1]), ""]
+        md += [_md_table(bench[0], bench[1]), ""] + [f"- {n}" for n in bench[3]] + [""]
     md += ["## How each method was run", ""] + [f"- {n}" for n in METHOD_NOTES]
     md += [f"- Laplacian steps: {meta['laplacian_steps']}.", ""]
     md += ["## Environment", "", f"- Machine: {machine}", f"- Software: {versions}", ""]
@@ -449,6 +495,7 @@ def write(out: Path, df, figs, meta, case_mods, labels):
         if bench[2]:
             h.append(f"<p><img src='{bench[2]}' alt='benchmark'></p>")
         h.append(_html_table(bench[0], bench[1]))
+        h.append("<ul>" + "".join(f"<li>{e(n)}</li>" for n in bench[3]) + "</ul>")
     h.append("<h2>How each method was run</h2><ul>")
     h += [f"<li>{_inline_html(n)}</li>" for n in METHOD_NOTES]
     h.append(f"<li>Laplacian steps: {meta['laplacian_steps']}.</li></ul>")

@@ -113,8 +113,7 @@ def _warm_up(bm) -> float:
 
 
 def _standin_base(loops):
-    """Before bubblemesh exists: a Triangle mesh without quality bound ('p' + area), sized like "
-    "§2."""
+    """Before bubblemesh exists: Triangle without quality bound ('p' + area), sized like §2."""
     import triangle as tr
 
     pts, segs = peers._segments(loops)
@@ -123,7 +122,8 @@ def _standin_base(loops):
     data = {"vertices": pts, "segments": segs}
     if len(loops) > 1:
         data["holes"] = peers.hole_points(loops)
-    out = tr.triangulate(data, f"pa{peers._domain_area(loops) / target:.6g}YQ")
+    area = peers.triangle_number(peers._domain_area(loops) / target)
+    out = tr.triangulate(data, f"pa{area}YQ")
     return np.asarray(out["vertices"], np.float64), np.asarray(out["triangles"], np.int64)
 
 
@@ -339,8 +339,7 @@ def environment() -> dict:
 
 
 def main(cases=None, out="reports", *, progress=True, methods=METHODS, write_report=True):
-    """Run the given case names (all of ``cases.ALL`` by default) into ``out``; returns the "
-    "DataFrame."""
+    """Run the named cases (default: all of ``cases.ALL``) into ``out``; returns the DataFrame."""
     import pandas as pd
     from tqdm import tqdm
 

@@ -217,6 +217,19 @@ def test_generators_keep_the_boundary_nodes_and_match_the_count(name):
     assert area == pytest.approx(4.0 - _regular_polygon_area(48, 0.25), rel=1e-9)  # hole left out
 
 
+@pytest.mark.peers
+def test_triangle_area_bound_is_written_without_exponent():
+    pytest.importorskip("triangle")
+    from cases import peers
+    from cases.geometry import circle
+
+    assert peers.triangle_number(3.13864e-05) == "0.0000313864"
+    assert peers.triangle_number(0.00205251234) == "0.00205251"
+    # Triangle's parser stops at 'e': a bound written 3.1e-05 would give a coarse mesh
+    p, t, _, info = peers.run_peer("triangle", [circle((0, 0), 1.0, 738)], 100_000)
+    assert abs(len(t) / 100_000 - 1) < 0.1, info["runs"]
+
+
 def _base_mesh(loops):
     tr = pytest.importorskip("triangle")
     from cases import peers
