@@ -20,6 +20,7 @@ can be pasted into an ``@example`` as is.  Nothing here imports bubblemesh.
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 from hypothesis import settings
@@ -32,8 +33,12 @@ from hypothesis import strategies as st
 
 def budget(n: int) -> settings:
     """Settings for an expensive test: ``n`` examples under the ``ci`` profile
-    (max_examples=100), scaled in proportion under the other profiles."""
-    return settings(max_examples=max(1, round(n * settings.default.max_examples / 100)))
+    (max_examples=100), scaled in proportion under the other profiles, and
+    divided by 5 when NUMBA_DISABLE_JIT is set (tox -e nojit)."""
+    scale = settings.default.max_examples / 100
+    if os.environ.get("NUMBA_DISABLE_JIT", "0") not in ("", "0"):
+        scale /= 5  # kernels run as plain Python: a fifth of the examples
+    return settings(max_examples=max(1, round(n * scale)))
 
 
 # ---------------------------------------------------------------------------
@@ -178,7 +183,9 @@ def _hole(draw, center, radius, spacing):
 
 
 @st.composite
-def domains(draw, max_holes: int = 4, max_corners: int = 12, graded: bool = True):
+def domains(
+    draw, max_holes: int = 4, max_corners: int = 12, graded: bool = True, min_spacing: float = 0.15
+):
     """A random simple domain as a :class:`DomainCase`.
 
     Outer loop: star-shaped around the origin (3..max_corners corners at
@@ -191,7 +198,7 @@ def domains(draw, max_holes: int = 4, max_corners: int = 12, graded: bool = True
     ang = draw(_angles(n))
     fac = draw(st.lists(st.floats(0.55, 1.0), min_size=n, max_size=n))
     corners = _star((0.0, 0.0), 1.0, ang, fac)
-    h = draw(st.floats(0.15, 0.5))
+    h = draw(st.floats(min_spacing, 0.5))
     outer = _refine(corners, h)
     rho = 0.95 * _min_edge_distance(corners)
     k = draw(st.integers(0, max_holes))

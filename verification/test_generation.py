@@ -1,0 +1,162 @@
+"""bubblemesh.generate (paper §2) on random domains.
+
+Properties and their oracles:
+- validity and Euler (V - E + F = 1 - holes): oracles.check_valid / euler_ok;
+- constrained Delaunay emptiness: oracles.check_constrained_delaunay (exact,
+  visibility across segments);
+- boundary conformity: oracles.check_conforming (segments = boundary edges,
+  no triangle outside / in a hole, area sum = exact domain area) and the
+  trimesh cross-check; the boundary nodes come first, unmoved, in the order
+  given, the segments oriented as computed independently from the loops;
+- population criterion eq. 6: bubble_area >= domain_area, bubble_area equals
+  an independent recomputation of eq. 1-4 from the returned mesh, boundary
+  radii equal eq. 2, and one insertion fewer does not satisfy eq. 6.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import oracles as O
+import pytest
+import strategies as S
+from hypothesis import example, given, note
+
+import bubblemesh as bm
+
+# found by hypothesis: the boundary mesh already satisfies eq. 6 (0 insertions)
+RECTANGLE_NO_INSERTIONS = S.DomainCase(
+    loops=(np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, 1.0]]),),
+    kind="2x1 rectangle: eq. 6 holds before any insertion",
+)
+
+
+def _domain(case):
+    return bm.Domain.from_loops(list(case.loops))
+
+
+def check_mesh_geometry(case, mesh):
+    """Everything a §2 or §3 mesh of ``case`` must satisfy (shared with
+    test_optimization)."""
+    pts, tri = mesh.points, mesh.triangles
+    seg = case.segments()
+    n_b = len(case.points)
+    # boundary nodes first, bitwise unmoved, in the user's order; segments
+    # oriented domain-on-the-left as computed here from the loops
+    assert mesh.n_boundary == n_b
+    assert np.array_equal(pts[:n_b], case.points), "boundary nodes moved or reordered"
+    got = sorted(map(tuple, np.asarray(mesh.segments).tolist()))
+    assert got == sorted(map(tuple, seg.tolist())), "segments differ from the loops' oriented edges"
+    assert pts.dtype == np.float64 and tri.dtype == np.int64 and mesh.neighbors.dtype == np.int64
+    O.check_valid(pts, tri, mesh.neighbors)
+    assert O.euler_ok(tri, case.n_holes), (
+        f"V - E + F = {O.euler_characteristic(tri)}, expected {1 - case.n_holes}"
+    )
+    assert set(np.unique(tri).tolist()) == set(range(len(pts))), "a node is not in any triangle"
+    O.check_conforming(pts, tri, seg)
+    O.check_constrained_delaunay(pts, tri, seg)
+    # interior nodes strictly inside the domain (exact point in polygon)
+    P, _ = O.exact_integers(pts)
+    loops = O.split_outer(P, O.loops_from_segments(seg))
+    outside = [i for i in range(n_b, len(pts)) if O.domain_location(P, loops, P[i]) <= 0]
+    assert not outside, f"interior nodes not strictly inside the domain: {outside[:5]}"
+
+
+def check_population(case, mesh):
+    """Eq. 6 and the independent recomputation of eq. 1-4."""
+    area = O.domain_area(case.points, O.loops_from_segments(case.segments()))
+    assert mesh.domain_area == pytest.approx(area, rel=1e-12), "A_geo is not the domain area"
+    # eq. 2 for the boundary nodes, from the boundary edge lengths
+    ref = O.boundary_radii_reference(case.points, case.segments())
+    r_b = np.array([ref[i] for i in range(len(case.points))])
+    np.testing.assert_allclose(mesh.radii[: len(r_b)], r_b, rtol=1e-12)
+    assert np.all(np.isfinite(mesh.radii)) and np.all(mesh.radii > 0)
+    # eq. 3-4 summed over the returned mesh's elements
+    recomputed = O.population_bubble_area(mesh.points, mesh.triangles, mesh.radii)
+    assert mesh.bubble_area == pytest.approx(recomputed, rel=1e-9), (
+        "stats bubble_area is not sum(pi r_e^2) of the returned mesh"
+    )
+    return area, recomputed
+
+
+@given(S.domains(min_spacing=0.05))
+@example(RECTANGLE_NO_INSERTIONS)
+def test_generate_mesh_is_valid_conforming_constrained_delaunay(case):
+    mesh = bm.generate(_domain(case))
+    note(f"{len(mesh.points)} nodes, {len(mesh.triangles)} triangles, {mesh.insertions} insertions")
+    check_mesh_geometry(case, mesh)
+
+
+@pytest.mark.peers
+@S.budget(50)
+@given(S.domains())
+def test_generate_mesh_agrees_with_trimesh(case):
+    pytest.importorskip("trimesh")
+    mesh = bm.generate(_domain(case))
+    area = O.domain_area(case.points, O.loops_from_segments(case.segments()))
+    O.check_trimesh(mesh.points, mesh.triangles, case.segments(), area=area)
+
+
+@given(S.domains(min_spacing=0.08))
+@example(RECTANGLE_NO_INSERTIONS)
+def test_population_criterion(case):
+    """§2.4 (f): stop at the first insertion with sum A_e >= A_geo."""
+    dom = _domain(case)
+    mesh = bm.generate(dom)
+    area, recomputed = check_population(case, mesh)
+    n = mesh.insertions
+    note(f"{n} insertions, sum A_e = {mesh.bubble_area!r}, A_geo = {area!r}")
+    assert mesh.bubble_area >= mesh.domain_area, "returned mesh does not satisfy eq. 6"
+    assert mesh.stats.get("stop", "population") == "population"
+    if n == 0:
+        return  # the boundary mesh already satisfies eq. 6
+    before = bm.generate(dom, max_insertions=n - 1)
+    assert before.insertions == n - 1
+    assert before.bubble_area < before.domain_area, (
+        f"eq. 6 already held after {n - 1} insertions: generation did not stop at the first"
+    )
+    check_population(case, before)
+    # the shorter run is a prefix of the same process: same boundary, one node fewer
+    assert len(before.points) == len(mesh.points) - 1
+
+
+@S.budget(30)
+@given(S.domains(max_holes=2))
+def test_generate_is_deterministic(case):
+    dom = _domain(case)
+    a, b = bm.generate(dom), bm.generate(dom)
+    for name in ("points", "triangles", "neighbors", "radii", "segments"):
+        assert np.array_equal(getattr(a, name), getattr(b, name)), name
+    assert a.insertions == b.insertions and a.bubble_area == b.bubble_area
+
+
+@pytest.mark.parametrize(
+    "case", [S.disk(48), S.square_with_hole()], ids=["disk", "square_with_hole"]
+)
+def test_generate_paper_like_domains(case):
+    mesh = bm.generate(_domain(case))
+    check_mesh_geometry(case, mesh)
+    area, _ = check_population(case, mesh)
+    # eq. 6 with a bubble per element: the element count is of the order
+    # A_geo / mean bubble area, i.e. the mesh is neither empty nor runaway
+    assert mesh.insertions > 0
+    mean_bubble = mesh.bubble_area / len(mesh.triangles)
+    assert 0.5 < area / (mean_bubble * len(mesh.triangles)) <= 1.0 + 1e-12
+
+
+@pytest.mark.slow
+def test_generate_fine_graded_domain():
+    """A larger case: fine hole spacing against a coarse outer loop (1:10)."""
+    n_out, n_hole = 40, 240
+    outer = [
+        (math.cos(2 * math.pi * i / n_out), math.sin(2 * math.pi * i / n_out)) for i in range(n_out)
+    ]
+    hole = [
+        (0.3 * math.cos(-2 * math.pi * i / n_hole), 0.3 * math.sin(-2 * math.pi * i / n_hole))
+        for i in range(n_hole)
+    ]
+    case = S.DomainCase(loops=(np.array(outer), np.array(hole)), hole_points=np.zeros((1, 2)))
+    mesh = bm.generate(_domain(case))
+    check_mesh_geometry(case, mesh)
+    check_population(case, mesh)
