@@ -197,7 +197,7 @@ def benchmark(path, df):
     for method, g in df.groupby("method", sort=False):
         g = g.sort_values("elements")
         ax[0].loglog(g["elements"], g["seconds"], "o-", ms=3, label=method)
-        ax[1].semilogx(g["elements"], g["elements_per_s"], "o-", ms=3, label=method)
+        ax[1].loglog(g["elements"], g["elements_per_s"], "o-", ms=3, label=method)
     ax[0].set_xlabel("elements")
     ax[0].set_ylabel("seconds (min of repeats)")
     ax[1].set_xlabel("elements")

@@ -98,7 +98,8 @@ def findings(df, labels=None):
             )
         else:
             out.append(("disagree", base + ": no improvement, unlike the paper."))
-        low = f"{_n(o.n_below_0_7)} of the optimized mesh stay below 0.7 ({o.pct_below_0_7:.1f}%)"
+        verb = "stays" if int(o.n_below_0_7) == 1 else "stay"
+        low = f"{_n(o.n_below_0_7)} of the optimized mesh {verb} below 0.7 ({o.pct_below_0_7:.1f}%)"
         if case in FEW_LOW:
             if o.n_below_0_7 == 0:
                 out.append(

@@ -199,65 +199,80 @@ def run_case(case, out: Path, bar=None, *, methods=METHODS, summary=None):
         )
 
     bm, why = _bubblemesh()
-    base = None
-    panels = {}
+    base, panels, m2, m3 = None, {}, None, None
     if bm is not None:
         step("§2 generate")
-        domain = bm.Domain.from_loops(loops)
-        t0 = time.perf_counter()
-        m2 = bm.generate(domain)
-        t2 = time.perf_counter() - t0
-        record(
-            "bubblemesh_delaunay",
-            m2.points,
-            m2.triangles,
-            t2,
-            {
-                "options": f"bubblemesh.generate: {m2.stats.get('insertions', '?')} insertions, "
-                f"ΣA_e = {m2.stats.get('bubble_area', float('nan')):.6g} ≥ "
-                f"A_geo = {m2.stats.get('domain_area', float('nan')):.6g}"
-            },
-            radii=m2.radii,
-        )
+        try:
+            t0 = time.perf_counter()
+            m2 = bm.generate(bm.Domain.from_loops(loops))
+            t2 = time.perf_counter() - t0
+        except Exception as exc:  # a failing case is reported, the others still run
+            why = f"bubblemesh.generate raised {type(exc).__name__}: {exc}"
+            rows.append(_row(case.NAME, "bubblemesh_delaunay", status="failed", reason=why))
+        else:
+            s2 = m2.stats
+            record(
+                "bubblemesh_delaunay",
+                m2.points,
+                m2.triangles,
+                t2,
+                {
+                    "options": f"bubblemesh.generate: {s2.get('insertions', '?')} insertions, "
+                    f"ΣA_e = {s2.get('bubble_area', float('nan')):.6g} ≥ "
+                    f"A_geo = {s2.get('domain_area', float('nan')):.6g}"
+                },
+                radii=m2.radii,
+            )
         if bar is not None:
             bar.update(1)
         step("§3 optimize")
-        t0 = time.perf_counter()
-        m3 = bm.optimize(m2, amplification=AMPLIFICATION)
-        t3 = time.perf_counter() - t0
-        record(
-            "bubblemesh_optimized",
-            m3.points,
-            m3.triangles,
-            t2 + t3,
-            {
-                "options": f"bubblemesh.optimize(amplification={AMPLIFICATION}) after generate: "
-                f"{m3.stats.get('iterations', '?')} iterations; seconds = generate + optimize "
-                f"({t2:.3f} + {t3:.3f})"
-            },
-            radii=m3.radii,
-        )
+        if m2 is None:
+            rows.append(_row(case.NAME, "bubblemesh_optimized", status="failed", reason=why))
+        else:
+            try:
+                t0 = time.perf_counter()
+                m3 = bm.optimize(m2, amplification=AMPLIFICATION)
+                t3 = time.perf_counter() - t0
+            except Exception as exc:
+                reason = f"bubblemesh.optimize raised {type(exc).__name__}: {exc}"
+                rows.append(_row(case.NAME, "bubblemesh_optimized", status="failed", reason=reason))
+            else:
+                record(
+                    "bubblemesh_optimized",
+                    m3.points,
+                    m3.triangles,
+                    t2 + t3,
+                    {
+                        "options": f"bubblemesh.optimize(amplification={AMPLIFICATION}) after "
+                        f"generate: {m3.stats.get('iterations', '?')} iterations; seconds = "
+                        f"generate + optimize ({t2:.3f} + {t3:.3f})"
+                    },
+                    radii=m3.radii,
+                )
         if bar is not None:
             bar.update(1)
-        base = (np.asarray(m2.points), np.asarray(m2.triangles))
-        base_label = "bubblemesh §2 mesh"
-        for key, m in (("delaunay", m2), ("optimized", m3)):
-            panels[key] = dict(
-                points=np.asarray(m.points),
-                triangles=np.asarray(m.triangles),
-                radii=np.asarray(m.radii),
-                rho=meshes[f"bubblemesh_{key}"][2],
-            )
+        if m2 is not None:
+            base = (np.asarray(m2.points), np.asarray(m2.triangles))
+            base_label = "bubblemesh §2 mesh"
+        if m2 is not None and m3 is not None:
+            for key, m in (("delaunay", m2), ("optimized", m3)):
+                panels[key] = dict(
+                    points=np.asarray(m.points),
+                    triangles=np.asarray(m.triangles),
+                    radii=np.asarray(m.radii),
+                    rho=meshes[f"bubblemesh_{key}"][2],
+                )
     else:
         for method in BUBBLEMESH:
             rows.append(_row(case.NAME, method, status="skipped", reason=why))
             if bar is not None:
                 bar.update(1)
+    if base is None:
         step("stand-in base")
         base = _standin_base(loops)
-        base_label = "STAND-IN Triangle 'pa' mesh (bubblemesh not available)"
+        base_label = "STAND-IN Triangle 'pa' mesh (bubblemesh §2 mesh not available)"
         notes.append(
-            f"{case.NAME}: bubblemesh unavailable ({why}); the post-processors ran on a stand-in "
+            f"{case.NAME}: no bubblemesh §2 mesh ({why}); the post-processors ran on a stand-in "
             f"Triangle mesh without quality bound, {len(base[1])} elements."
         )
     target = len(base[1])
@@ -354,7 +369,12 @@ def main(cases=None, out="reports", *, progress=True, methods=METHODS, write_rep
 
     summary, summary_src = _quality_summary()
     bm, why = _bubblemesh()
-    warm = _warm_up(bm) if bm is not None else None
+    warm = None
+    if bm is not None:
+        try:
+            warm = _warm_up(bm)
+        except Exception as exc:  # the cases will report their own failures
+            print(f"bubblemesh warm-up failed: {type(exc).__name__}: {exc}", file=sys.stderr)
 
     per_case = len(BUBBLEMESH) + sum(1 for p in peers.PEERS if p in methods)
     rows, figs, notes = [], {}, []
