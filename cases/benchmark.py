@@ -278,7 +278,7 @@ def compile_times(timeout: float = 900) -> dict:
         "t2=time.perf_counter(); print(t1-t0, t2-t1)"
     )
     root = str(Path(__file__).resolve().parent.parent)
-    out = {}
+    out: dict[str, float | str] = {}
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=root)
         for key in ("cold", "warm"):
