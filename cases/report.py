@@ -334,6 +334,11 @@ def _benchmark_notes(out: Path) -> list[str]:
                 f"Fitted log-log slope of seconds vs elements (sizes >= "
                 f"{m.get('slope_from_elements')} elements): {s}."
             )
+    for t in m.get("targets", []):
+        notes.append(
+            f"Issue-6 target {'met' if t['met'] else 'MISSED'}: {t['target']} "
+            f"(measured {t['measured']} {t['unit']}).".replace(" )", ")")
+        )
     c = m.get("compile", {})
     if "cold_first_call_s" in c:
         notes.append(
