@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import datetime as _dt
+import json
 import os
 import platform
 import sys
@@ -402,9 +403,32 @@ def main(cases=None, out="reports", *, progress=True, methods=METHODS, write_rep
         laplacian_steps=peers.LAPLACIAN_STEPS,
         amplification=AMPLIFICATION,
     )
+    (out / "reproduce.json").write_text(json.dumps(meta, indent=2, default=str) + "\n")
     if write_report:
         report.write(out, df, figs, meta, {n: _cases.get(n) for n in names}, LABELS)
     return df
+
+
+def rewrite_report(out="reports") -> bool:
+    """Rewrite README.md / index.html from the quality.csv, figures and reproduce.json already in
+    ``out`` (no meshing), e.g. after a new benchmark run.  False when there is no run to use."""
+    import pandas as pd
+
+    from cases import report
+
+    out = Path(out)
+    if not (out / "quality.csv").exists() or not (out / "reproduce.json").exists():
+        return False
+    df = pd.read_csv(out / "quality.csv")
+    meta = json.loads((out / "reproduce.json").read_text())
+    names = [n for n in dict.fromkeys(df["case"]) if n in _cases.ALL]
+    figs = {
+        n: {k: out / "figures" / f"{n}_{k}.png" for k in ("panels", "histograms", "meshes")
+            if (out / "figures" / f"{n}_{k}.png").exists()}
+        for n in names
+    }  # fmt: skip
+    report.write(out, df, figs, meta, {n: _cases.get(n) for n in names}, LABELS)
+    return True
 
 
 def _cli(argv=None):
@@ -419,7 +443,12 @@ def _cli(argv=None):
     )
     ap.add_argument("--out", default="reports", help="output folder (default: reports)")
     ap.add_argument("--no-progress", action="store_true")
+    ap.add_argument(
+        "--report-only", action="store_true", help="rewrite the report from the files in --out"
+    )
     a = ap.parse_args(argv)
+    if a.report_only:
+        sys.exit(0 if rewrite_report(a.out) else "no quality.csv / reproduce.json to report from")
     df = main(a.case, a.out, progress=not a.no_progress)
     ok = df[df.status == "ok"]
     print(

@@ -369,6 +369,9 @@ def test_reproduce_one_case_numbers_match_the_written_meshes(tmp_path):
         assert (tmp_path / f).stat().st_size > 0, f
     html = (tmp_path / "index.html").read_text()
     assert "fig3_circle_histograms.png" in html and "Findings" in html
+    readme = (tmp_path / "README.md").read_text()
+    assert reproduce.rewrite_report(tmp_path)  # from the written files alone: the same report
+    assert (tmp_path / "README.md").read_text() == readme
 
     boundary = np.vstack(cases.get("fig3_circle").loops())
     ok = csv[csv.status == "ok"]
