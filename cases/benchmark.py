@@ -17,7 +17,10 @@ the number the ≤ 600 MB target is about) and ``peak_delta_mb`` the part above
 its RSS after warm-up.
 
 Methods: ``bubblemesh_generate`` (§2), ``bubblemesh_optimize`` (§3 with the
-final re-triangulation) and ``bubblemesh_total`` (both); ``triangle``
+final re-triangulation) and ``bubblemesh_total`` (both), with numba's default
+threads, and ``bubblemesh_optimize_1thread`` / ``bubblemesh_total_1thread``
+with ``NUMBA_NUM_THREADS=1`` (what the parallel loops gain, or cost on a busy
+machine; not in quick mode); ``triangle``
 (``pq30a<A>YQ``, A tuned untimed to the §2 element count); ``gmsh_frontal``
 (``Mesh.Algorithm=6``, uniform size tuned untimed to the same count; only up to
 ``GMSH_CAP`` elements, as it is far slower).  ``ratio_to_triangle`` is the
@@ -267,6 +270,40 @@ def _run_child(spec: dict, timeout: float, env=None) -> list[dict]:
     return json.loads(p.stdout.strip().splitlines()[-1])
 
 
+def _threading_info() -> dict:
+    """numba's threading layer and thread count in a child (as the measurements ran), plus the
+    environment variables that change them."""
+    code = (
+        "import bubblemesh as bm, numba; from cases.geometry import circle;"
+        "bm.optimize(bm.generate(bm.Domain.from_loops([circle((0,0),1,16)])));"
+        "print(numba.threading_layer(), numba.get_num_threads())"
+    )
+    root = str(Path(__file__).resolve().parent.parent)
+    info: dict[str, str] = {
+        k: os.environ[k]
+        for k in (
+            "NUMBA_NUM_THREADS",
+            "NUMBA_THREADING_LAYER",
+            "OMP_WAIT_POLICY",
+            "OMP_NUM_THREADS",
+        )
+        if k in os.environ
+    }
+    try:
+        p = subprocess.run(
+            [sys.executable, "-W", "ignore", "-c", code],
+            capture_output=True,
+            text=True,
+            timeout=300,
+            env=dict(os.environ, PYTHONPATH=root),
+            cwd=root,
+        )
+        info["layer"], info["numba_threads"] = p.stdout.split()[-2:]
+    except Exception as exc:
+        info["error"] = f"{type(exc).__name__}: {exc}"
+    return info
+
+
 def compile_times(timeout: float = 900) -> dict:
     """First-call time of generate+optimize on a tiny disk in a fresh process: with an empty
     numba cache (cold: compile everything) and again with the cache it filled (warm)."""
@@ -382,7 +419,7 @@ def targets(df, slopes: dict, compile_: dict) -> list[dict]:
     return out
 
 
-def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress=True):
+def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress=True, serial=True):
     import pandas as pd
     from tqdm import tqdm
 
@@ -416,6 +453,17 @@ def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress
             None,
         )
         match = ref or int(C_DISK * n * n)
+        if (
+            serial and not quick
+        ):  # the same in one thread: shows what numba's parallel loops gain (or cost)
+            one = _run_child(
+                {"method": "bubblemesh", "n_boundary": n, "repeats": repeats},
+                timeout * 2,
+                env=dict(os.environ, NUMBA_NUM_THREADS="1"),
+            )
+            for r in one:
+                r["method"] = r["method"] + "_1thread"
+            got += [r for r in one if r["method"] != "bubblemesh_generate_1thread"]
         got += _run_child(
             {"method": "triangle", "n_boundary": n, "repeats": repeats, "target": match}, timeout
         )
@@ -466,6 +514,7 @@ def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress
         compile=({"skipped": "quick mode"} if quick else compile_times()),
         total_seconds=time.perf_counter() - t_start,
         load_average_start_end=[round(load_start[0], 2), round(os.getloadavg()[0], 2)],
+        threads=_threading_info(),
     )
     meta["targets"] = (
         [] if quick else targets(df, slopes, meta["compile"])
@@ -496,13 +545,21 @@ def _cli(argv=None):
         "--quick", action="store_true", help="tiny sizes, 1 repeat, no compile-time probe (CI)"
     )
     ap.add_argument("--out", default="reports")
+    ap.add_argument("--no-serial", action="store_true", help="skip the 1-thread bubblemesh runs")
     ap.add_argument("--no-progress", action="store_true")
     ap.add_argument("--child", help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
     if a.child:
         print(json.dumps(_child(json.loads(a.child))))
         return
-    df = main(a.max_elements, a.repeats, a.quick, a.out, progress=not a.no_progress)
+    df = main(
+        a.max_elements,
+        a.repeats,
+        a.quick,
+        a.out,
+        progress=not a.no_progress,
+        serial=not a.no_serial,
+    )
     print(df.to_string(index=False))
 
 

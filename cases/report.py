@@ -334,6 +334,8 @@ def _benchmark_notes(out: Path) -> list[str]:
                 f"Fitted log-log slope of seconds vs elements (sizes >= "
                 f"{m.get('slope_from_elements')} elements): {s}."
             )
+    if m.get("threads"):
+        notes.append(f"numba threading in the children: {m['threads']}.")
     for t in m.get("targets", []):
         notes.append(
             f"Issue-6 target {'met' if t['met'] else 'MISSED'}: {t['target']} "
