@@ -366,12 +366,10 @@ METHOD_NOTES = [
     "at domain area / §2 element count and is corrected (A *= count/target, 3 runs, the closest "
     "kept).",
     "**Gmsh** meshes a geometry whose points are the boundary nodes and whose lines are "
-    "transfinite with 2 nodes "
-    "(no node added on the boundary); the interior size is a factor times the reciprocal-distance "
-    "mean of the "
-    "nearest boundary nodes' sizes (a Python size callback, counted in the time); the factor is "
-    "tuned to the §2 "
-    "element count.",
+    "transfinite with 2 nodes (no node added on the boundary). Gmsh's size factor does not reach "
+    "the interior then, so the interior size is a factor times the reciprocal-distance mean, over "
+    "the loops, of the size at each loop's nearest node (node size: mean of its two segments; a "
+    "Python size callback, counted in the time); the factor is tuned to the §2 element count.",
     "**pymeshlab isotropic remesh** runs `meshing_isotropic_explicit_remeshing` on the §2 mesh "
     "with an absolute "
     "target edge length tuned to the §2 element count. The filter has no boundary lock (on the "
