@@ -493,8 +493,13 @@ def _is_counterclockwise(ring: np.ndarray) -> bool:
 
 
 def _polygon_area(ring: np.ndarray) -> float:
-    """Unsigned shoelace area, summed with math.fsum."""
-    x, y = ring[:, 0], ring[:, 1]
+    """Unsigned shoelace area, summed with math.fsum.
+
+    Coordinates are taken relative to the first node, so a domain far from the
+    origin loses no digits to large products (the shift is exact for nodes
+    within a factor of two of it).
+    """
+    x, y = ring[:, 0] - ring[0, 0], ring[:, 1] - ring[0, 1]
     terms = np.concatenate([x * np.roll(y, -1), -(np.roll(x, -1) * y)])
     return abs(0.5 * math.fsum(terms.tolist()))
 

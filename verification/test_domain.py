@@ -362,6 +362,15 @@ def test_segments_agree_with_an_independent_orientation(case):
     )
 
 
+@budget(40)
+@given(domains(), st.sampled_from([1e6, -3e7]))
+def test_area_does_not_depend_on_where_the_domain_lies(case, offset):
+    domain = Domain.from_loops(case.loops)
+    shifted = Domain.from_loops([ring + offset for ring in case.loops])
+    # coordinates near 1e7 carry ~1e-9 of rounding: the area may move that much, no more
+    assert shifted.area == pytest.approx(domain.area, rel=1e-7)
+
+
 def test_arrays_are_read_only_and_typed():
     domain = Domain.from_loops([SQUARE, SMALL_HOLE])
     assert domain.points.dtype == np.float64 and domain.points.shape == (8, 2)
