@@ -251,8 +251,7 @@ def _checked_ring(ring, k: int) -> np.ndarray:
             f"{name} node {node} has a coordinate of magnitude {np.abs(ring[node]).max():.3g}, "
             f"above {MAX_COORDINATE:g} where the exact predicates overflow; rescale the geometry"
         )
-    if len(ring) >= 2 and (ring[-1] == ring[0]).all():
-        ring = ring[:-1]
+    ring = _open_ring(ring)
     if len(ring) < 3:
         raise GeometryError(f"{name} has {len(ring)} distinct nodes; a loop needs at least 3")
     repeats = (ring == np.roll(ring, -1, axis=0)).all(axis=1)
@@ -267,6 +266,7 @@ def _checked_ring(ring, k: int) -> np.ndarray:
 
 
 def _open_ring(ring: np.ndarray) -> np.ndarray:
+    """Drop a last node that exactly repeats the first (closed rings, as shapely's)."""
     if len(ring) >= 2 and (ring[-1] == ring[0]).all():
         return ring[:-1]
     return ring

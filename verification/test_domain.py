@@ -347,10 +347,6 @@ def test_orientation_is_normalised_whatever_the_input_orientation(case, data):
     # segments chain each loop's nodes in the loop's oriented order
     expected = np.concatenate([np.column_stack([ix, np.roll(ix, -1)]) for ix in domain.loops])
     np.testing.assert_array_equal(domain.segments, expected)
-    for a, b in domain.segments[
-        :3
-    ].tolist():  # consecutive in the user's ring, one way or the other
-        assert abs(a - b) == 1 or {a, b} & {int(ix[0]) for ix in domain.loops}
 
 
 @budget(40)
@@ -384,18 +380,17 @@ def test_arrays_are_read_only_and_typed():
 @budget(60)
 @given(domains())
 def test_area_and_hole_points_against_shapely(case):
-    shapely = pytest.importorskip("shapely")
+    pytest.importorskip("shapely")
     from shapely.geometry import Point, Polygon
 
     domain = Domain.from_loops(case.loops)
-    polygon = Polygon(case.loops[0], [ring for ring in case.loops[1:]])
+    polygon = Polygon(case.loops[0], case.loops[1:])
     assert polygon.is_valid
     assert domain.area == pytest.approx(polygon.area, rel=1e-12)
     assert len(domain.hole_points) == len(case.loops) - 1
     for ring, point in zip(case.loops[1:], domain.hole_points):
         assert Polygon(ring).contains(Point(point))
         assert not polygon.intersects(Point(point))
-    assert shapely is not None
 
 
 def test_hole_point_of_a_thin_non_convex_hole():
