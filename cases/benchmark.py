@@ -344,7 +344,7 @@ def loglog_slope(df, method, min_elements=SLOPE_FROM):
     )
 
 
-def targets(df, slopes: dict, compile_: dict) -> list[dict]:
+def check_targets(df, slopes: dict, compile_: dict) -> list[dict]:
     """Issue 6's targets checked against the measured rows: target, measured value, met."""
     ok = df[df.status == "ok"]
 
@@ -517,7 +517,7 @@ def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress
         threads=_threading_info(),
     )
     meta["targets"] = (
-        [] if quick else targets(df, slopes, meta["compile"])
+        [] if quick else check_targets(df, slopes, meta["compile"])
     )  # tiny sizes judge nothing
     (out / "benchmark.json").write_text(json.dumps(meta, indent=2, default=str) + "\n")
     ok = df[df.status == "ok"]

@@ -435,3 +435,28 @@ def test_boundary_nodes_for_calibration():
 
     assert benchmark.boundary_nodes_for(1_000_000) == pytest.approx(2333, abs=5)
     assert benchmark.boundary_nodes_for(10) == 12
+
+
+def test_issue6_targets_are_judged_from_the_rows():
+    pd = pytest.importorskip("pandas")
+    from cases import benchmark
+
+    rows = [
+        ("bubblemesh_generate", 1_000_000, 0.9, 1.5, 500.0),
+        ("bubblemesh_optimize", 1_000_000, 4.0, 6.0, 580.0),
+        ("bubblemesh_total", 1_000_000, 4.9, 7.5, 580.0),
+        ("bubblemesh_total", 100_000, 0.4, 7.0, 200.0),
+        ("gmsh_frontal", 100_000, 3.0, 50.0, 130.0),
+    ]
+    df = pd.DataFrame(
+        rows, columns=["method", "elements", "seconds", "ratio_to_triangle", "peak_mb"]
+    )
+    df["elements_per_s"] = df.elements / df.seconds
+    df["status"] = "ok"
+    got = benchmark.check_targets(df, {"bubblemesh_total": 1.05}, {"warm_first_call_s": 0.4})
+    met = {t["target"].split(":")[0].split(" at ")[0]: t["met"] for t in got}
+    assert len(got) == 7 and all(met.values()), got
+    speed = next(t for t in got if "Gmsh" in t["target"])
+    assert speed["measured"] == pytest.approx((3.0 / 1e5) / (0.4 / 1e5), rel=1e-2)
+    df.loc[df.method == "bubblemesh_total", "peak_mb"] = 700.0
+    assert not next(t for t in benchmark.check_targets(df, {}, {}) if "RSS" in t["target"])["met"]
