@@ -34,8 +34,8 @@ from .errors import MeshingError
 from .mesh import Mesh
 from .predicates import orient2d
 from .triangulation import (
-    OK,
     _MESSAGES,
+    OK,
     constrained_delaunay,
     fill_cavity,
     find_cavity,
@@ -225,7 +225,9 @@ def insertion_loop(
         R[npts] = r_e[t]
         for k in range(ncav):
             _accumulate(acc, -a_e[cav[k]])
-        status, ntri_new = fill_cavity(P, npts, tri, nbr, con, vt, ntri, cav, ncav, bnd, nb, vstart, newt)
+        status, ntri_new = fill_cavity(
+            P, npts, tri, nbr, con, vt, ntri, cav, ncav, bnd, nb, vstart, newt
+        )
         if status != OK:
             break
         ntri = ntri_new

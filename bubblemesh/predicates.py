@@ -158,7 +158,7 @@ def _sign_value(e):
     """The most significant component: it carries the expansion's sign."""
     for k in range(e.size - 1, -1, -1):
         if e[k] != 0.0:
-            return e[k]
+            return float(e[k])
     return 0.0
 
 
@@ -191,7 +191,7 @@ def orient2d(ax, ay, bx, by, cx, cy):
     det = detleft - detright
     detsum = abs(detleft) + abs(detright)
     if abs(det) > CCW_ERRBOUND * detsum:
-        return det
+        return float(det)
     # A float difference is zero only if the coordinates are equal, so a product
     # with a zero factor is exactly zero; both zero means exactly collinear.
     if (acx == 0.0 or bcy == 0.0) and (acy == 0.0 or bcx == 0.0):
@@ -249,5 +249,5 @@ def incircle(ax, ay, bx, by, cx, cy, dx, dy):
         + (abs(adxbdy) + abs(bdxady)) * clift
     )
     if abs(det) > ICC_ERRBOUND * permanent:
-        return det
+        return float(det)
     return incircle_exact(ax, ay, bx, by, cx, cy, dx, dy)

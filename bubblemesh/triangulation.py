@@ -432,7 +432,8 @@ def _lawson(P, tri, nbr, con, vt, stack_t, stack_i, top, max_flips):
         for m in range(3):
             if nbr[n, m] == t and tri[n, (m + 1) % 3] == w:
                 q2 = tri[n, m]
-        if incircle(P[a, 0], P[a, 1], P[u, 0], P[u, 1], P[w, 0], P[w, 1], P[q2, 0], P[q2, 1]) <= 0.0:
+        inside = incircle(P[a, 0], P[a, 1], P[u, 0], P[u, 1], P[w, 0], P[w, 1], P[q2, 0], P[q2, 1])
+        if inside <= 0.0:
             continue
         _flip(tri, nbr, con, vt, t, i)
         flips += 1
@@ -706,6 +707,8 @@ def _hilbert_keys(P, bits):
 def hilbert_order(points):
     """Insertion order along a Hilbert curve: each new point lands next to the
     previous one, so the walking point location takes O(1) steps on average."""
+    if len(points) == 0:
+        return np.zeros(0, np.int64)
     keys = _hilbert_keys(np.ascontiguousarray(points, dtype=np.float64), 16)
     return np.argsort(keys, kind="stable").astype(np.int64)
 
