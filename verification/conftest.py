@@ -9,6 +9,8 @@ Hypothesis profiles (select with HYPOTHESIS_PROFILE=<name>; default ``ci``):
   failure found once is replayed first.
 - ``thorough``: ten times the ``ci`` budget, random seeds; for nightly or
   pre-release runs.
+- ``nojit``: the default when NUMBA_DISABLE_JIT is set (kernels run as plain
+  Python): a fifth of ``ci``, still derandomized.
 
 Tests with their own expensive bodies scale their budget with
 ``strategies.budget(n)`` so that ``thorough`` also runs them harder.
@@ -37,7 +39,10 @@ _common = dict(
 settings.register_profile("ci", max_examples=100, derandomize=True, database=None, **_common)
 settings.register_profile("dev", max_examples=30, **_common)
 settings.register_profile("thorough", max_examples=1000, **_common)
-PROFILE = os.environ.get("HYPOTHESIS_PROFILE", "ci")
+# kernels as plain Python (tox -e nojit) are far slower: a fifth of ci
+settings.register_profile("nojit", max_examples=20, derandomize=True, database=None, **_common)
+_NOJIT = os.environ.get("NUMBA_DISABLE_JIT", "0") not in ("", "0")
+PROFILE = os.environ.get("HYPOTHESIS_PROFILE") or ("nojit" if _NOJIT else "ci")
 settings.load_profile(PROFILE)
 
 

@@ -20,7 +20,6 @@ can be pasted into an ``@example`` as is.  Nothing here imports bubblemesh.
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
 from hypothesis import settings
@@ -33,12 +32,9 @@ from hypothesis import strategies as st
 
 def budget(n: int) -> settings:
     """Settings for an expensive test: ``n`` examples under the ``ci`` profile
-    (max_examples=100), scaled in proportion under the other profiles, and
-    divided by 5 when NUMBA_DISABLE_JIT is set (tox -e nojit)."""
-    scale = settings.default.max_examples / 100
-    if os.environ.get("NUMBA_DISABLE_JIT", "0") not in ("", "0"):
-        scale /= 5  # kernels run as plain Python: a fifth of the examples
-    return settings(max_examples=max(1, round(n * scale)))
+    (max_examples=100), scaled in proportion under the other profiles
+    (``nojit``: a fifth, ``thorough``: ten times)."""
+    return settings(max_examples=max(1, round(n * settings.default.max_examples / 100)))
 
 
 # ---------------------------------------------------------------------------
