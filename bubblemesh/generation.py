@@ -367,6 +367,34 @@ def _progress_bar(progress, total):
     return tqdm(total=total, desc="generate (§2)", unit="node")
 
 
+@njit(cache=True)
+def _centroids(points, triangles):
+    out = np.empty((triangles.shape[0], 2))
+    for t in range(triangles.shape[0]):
+        for k in range(2):
+            out[t, k] = (points[triangles[t, 0], k] + points[triangles[t, 1], k]
+                         + points[triangles[t, 2], k]) / 3.0
+    return out
+
+
+@njit(cache=True)
+def _permute_mesh(triangles, neighbors, new_of_old, tri_order):
+    """Triangle rows in ``tri_order``, node ids and neighbour ids renamed."""
+    m = tri_order.shape[0]
+    tri_new_of_old = np.empty(m, np.int64)
+    for k in range(m):
+        tri_new_of_old[tri_order[k]] = k
+    tri = np.empty((m, 3), np.int64)
+    nbr = np.empty((m, 3), np.int64)
+    for k in range(m):
+        t = tri_order[k]
+        for j in range(3):
+            tri[k, j] = new_of_old[triangles[t, j]]
+            n = neighbors[t, j]
+            nbr[k, j] = tri_new_of_old[n] if n >= 0 else -1
+    return tri, nbr
+
+
 def spatial_renumbering(points, triangles, neighbors, n_fixed):
     """Renumber nodes after ``n_fixed`` and all triangles along a Hilbert curve.
 
@@ -379,13 +407,9 @@ def spatial_renumbering(points, triangles, neighbors, n_fixed):
     old_of_new[n_fixed:] = n_fixed + hilbert_order(points[n_fixed:])
     new_of_old = np.empty(n, np.int64)
     new_of_old[old_of_new] = np.arange(n)
-    tri = new_of_old[triangles]
-    tri_order = hilbert_order(points[triangles].mean(axis=1))
-    tri_new_of_old = np.empty(len(tri), np.int64)
-    tri_new_of_old[tri_order] = np.arange(len(tri))
-    nbr = neighbors[tri_order]
-    nbr = np.where(nbr >= 0, tri_new_of_old[np.maximum(nbr, 0)], -1)
-    return points[old_of_new], tri[tri_order], nbr, old_of_new
+    tri_order = hilbert_order(_centroids(points, triangles))
+    tri, nbr = _permute_mesh(triangles, neighbors, new_of_old, tri_order)
+    return points[old_of_new], tri, nbr, old_of_new
 
 
 def _as_mesh(domain, ws, state, acc, boundary, status, seconds):
