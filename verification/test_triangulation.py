@@ -196,8 +196,9 @@ def test_delaunay_invariant_under_exact_transformations(case, how, k):
 def _check_cdt(case, points, segments, tri, nbr):
     O.check_valid(points, tri, nbr)
     assert tri.dtype == np.int64 and nbr.dtype == np.int64
-    assert O.euler_ok(tri, case.n_holes), f"Euler characteristic {O.euler_characteristic(tri)}"
+    # conformity first: its messages say which segment / triangle is wrong
     O.check_conforming(points, tri, segments)
+    assert O.euler_ok(tri, case.n_holes), f"Euler characteristic {O.euler_characteristic(tri)}"
     O.check_constrained_delaunay(points, tri, segments)
 
 
