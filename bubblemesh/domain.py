@@ -27,15 +27,12 @@ import numpy.typing as npt
 from numba import njit
 
 from bubblemesh.errors import GeometryError
-from bubblemesh.predicates import orient2d
+from bubblemesh.predicates import MAX_COORDINATE, MIN_COORDINATE, orient2d, out_of_range
 
 __all__ = ["Domain"]
 
 # orient2d and incircle are exact only while their products neither overflow nor
-# underflow (see bubblemesh.predicates); incircle is of degree 4 in the coordinates.
-# Single tiny coordinates (sin(pi) ~ 1e-16) are harmless; a tiny geometry is not.
-MAX_COORDINATE = 1e60
-MIN_EXTENT = 1e-60
+# underflow: bubblemesh.predicates sets the coordinate range and checks it.
 
 _NO_CONFLICT, _CROSSES, _TOUCHES, _OVERLAPS = 0, 1, 2, 3
 _CONFLICT_VERB = {_CROSSES: "crosses", _TOUCHES: "touches", _OVERLAPS: "overlaps"}
@@ -90,11 +87,6 @@ class Domain:
         """
         rings = [_checked_ring(ring, k) for k, ring in enumerate(_as_loop_list(loops))]
         points = np.concatenate(rings)
-        if np.abs(points).max() < MIN_EXTENT:
-            raise GeometryError(
-                f"every coordinate is below {MIN_EXTENT:g} in magnitude, where the exact "
-                "predicates underflow; rescale the geometry"
-            )
         offsets = np.cumsum([0] + [len(ring) for ring in rings]).astype(np.int64)
         for k, ring in enumerate(rings):
             if _all_collinear(ring):
@@ -244,12 +236,13 @@ def _checked_ring(ring, k: int) -> np.ndarray:
     finite = np.isfinite(ring).all(axis=1)
     if not finite.all():
         raise GeometryError(f"{name} has a non-finite coordinate at node {int(np.argmin(finite))}")
-    too_large = (np.abs(ring) > MAX_COORDINATE).any(axis=1)
-    if too_large.any():
-        node = int(np.argmax(too_large))
+    outside = out_of_range(ring)
+    if outside.any():
+        node = int(np.argmax(outside))
         raise GeometryError(
-            f"{name} node {node} has a coordinate of magnitude {np.abs(ring[node]).max():.3g}, "
-            f"above {MAX_COORDINATE:g} where the exact predicates overflow; rescale the geometry"
+            f"{name} node {node} = {tuple(map(float, ring[node]))} has a coordinate outside "
+            f"the exact predicates' range (0 or {MIN_COORDINATE:.3g} to {MAX_COORDINATE:.3g} in "
+            "magnitude); rescale the geometry"
         )
     ring = _open_ring(ring)
     if len(ring) < 3:

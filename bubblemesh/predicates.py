@@ -13,8 +13,13 @@ predicates, ``(3 + 16 eps) eps`` and ``(10 + 96 eps) eps``).  Only when the
 filter cannot decide, the determinant is evaluated *exactly* as a
 floating-point expansion (a sum of non-overlapping doubles; error-free
 ``two_sum`` / ``two_product`` transformations), and the sign of its largest
-component is returned.  Inputs must be finite and not so large that products
-overflow (|x| < 1e150) nor so small that they underflow (the Domain checks).
+component is returned.  That is exact as long as no product overflows or
+underflows: every nonzero coordinate must lie in [MIN_COORDINATE,
+MAX_COORDINATE] = [2**-100, 2**100] (about 7.9e-31 to 1.3e30).  Then the
+smallest nonzero difference of two coordinates is 2**-152, whose 4th power (the
+in-circle degree) and the error bounds stay far above the underflow threshold.
+``out_of_range`` finds points that break this; the triangulation and the Domain
+reject them with a GeometryError.
 
 All functions are numba ``njit(cache=True)``; they are plain Python functions
 when ``NUMBA_DISABLE_JIT=1``.
@@ -27,6 +32,17 @@ _EPS = 2.0**-53  # half an ulp of 1.0: the unit round-off of float64
 _SPLITTER = 2.0**27 + 1.0  # Dekker's splitter for 53-bit doubles
 CCW_ERRBOUND = (3.0 + 16.0 * _EPS) * _EPS
 ICC_ERRBOUND = (10.0 + 96.0 * _EPS) * _EPS
+MIN_COORDINATE = 2.0**-100
+MAX_COORDINATE = 2.0**100
+
+
+def out_of_range(points):
+    """Boolean mask of the rows with a coordinate that is non-finite or nonzero
+    but outside [MIN_COORDINATE, MAX_COORDINATE] in magnitude."""
+    magnitude = np.abs(np.asarray(points, dtype=np.float64))
+    bad = ~np.isfinite(magnitude) | (magnitude > MAX_COORDINATE)
+    bad |= (magnitude != 0.0) & (magnitude < MIN_COORDINATE)
+    return bad.any(axis=-1)
 
 
 # --- error-free transformations -------------------------------------------------

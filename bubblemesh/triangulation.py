@@ -29,7 +29,7 @@ import numpy as np
 from numba import njit
 
 from .errors import GeometryError, MeshingError
-from .predicates import incircle, orient2d
+from .predicates import MAX_COORDINATE, MIN_COORDINATE, incircle, orient2d, out_of_range
 
 GHOST = -1
 
@@ -720,9 +720,14 @@ def _as_points(points):
     P = np.ascontiguousarray(points, dtype=np.float64)
     if P.ndim != 2 or P.shape[1] != 2:
         raise GeometryError(f"points must be an (N, 2) array, got shape {P.shape}")
-    if not np.all(np.isfinite(P)):
-        bad = int(np.flatnonzero(~np.isfinite(P).all(axis=1))[0])
-        raise GeometryError(f"point {bad} has a non-finite coordinate")
+    bad = out_of_range(P)
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise GeometryError(
+            f"point {k} = {tuple(map(float, P[k]))} has a coordinate that is not finite or "
+            f"not 0 or between {MIN_COORDINATE:.3g} and {MAX_COORDINATE:.3g} in magnitude, "
+            "where the exact predicates would overflow or underflow; rescale the input"
+        )
     return P
 
 

@@ -171,7 +171,9 @@ def test_non_finite_coordinate_names_loop_and_node(bad):
 
 def test_coordinate_out_of_safe_range_is_rejected():
     message = raises_geometry([[(0.0, 0.0), (1e200, 0.0), (0.0, 1.0)]])
-    assert message.startswith("loop 0 (outer) node 1 has a coordinate of magnitude 1e+200")
+    assert message.startswith("loop 0 (outer) node 1 = (1e+200, 0.0) has a coordinate outside")
+    message = raises_geometry([[(0.0, 0.0), (1.0, 1e-308), (0.0, 1.0)]])
+    assert message.startswith("loop 0 (outer) node 1 = (1.0, 1e-308) has a coordinate outside")
 
 
 def test_wrong_shape_and_empty_input():
