@@ -581,13 +581,14 @@ def _set_constrained(tri, nbr, con, t, i):
 
 
 @njit(cache=True)
-def recover_segments(P, tri, nbr, con, vt, ntri, segments):
-    """Recover every segment; returns (status, segment index, vertex)."""
-    qcap = 4 * P.shape[0] + 64
-    qu = np.empty(qcap, np.int64)
-    qw = np.empty(qcap, np.int64)
-    stack_t = np.empty(16 * P.shape[0] + 1024, np.int64)
-    stack_i = np.empty(16 * P.shape[0] + 1024, np.int64)
+def recover_segments(P, tri, nbr, con, vt, ntri, segments, capacity):
+    """Recover every segment; returns (status, segment index, vertex).
+    ``capacity`` sizes the crossing queue and the flip stack (ERR_STACK if a
+    single recovery needs more)."""
+    qu = np.empty(capacity, np.int64)
+    qw = np.empty(capacity, np.int64)
+    stack_t = np.empty(4 * capacity, np.int64)
+    stack_i = np.empty(4 * capacity, np.int64)
     for s in range(segments.shape[0]):
         a = segments[s, 0]
         b = segments[s, 1]
@@ -778,12 +779,19 @@ def constrained_delaunay(points, segments, *, allow_duplicates=False):
     S = np.ascontiguousarray(segments, dtype=np.int64).reshape(-1, 2)
     if S.size and (S.min() < 0 or S.max() >= P.shape[0]):
         raise GeometryError("a segment refers to a point index out of range")
-    tri, nbr, con, vt, ntri, dup_of = ghost_delaunay(P)
-    dups = np.flatnonzero(dup_of >= 0)
-    if dups.size and not allow_duplicates:
-        k = int(dups[0])
-        raise GeometryError(f"point {k} duplicates point {int(dup_of[k])}")
-    status, s, v = recover_segments(P, tri, nbr, con, vt, ntri, S)
+    # Stacks for a few thousand crossed edges per segment; a recovery that needs
+    # more reruns the whole (deterministic) triangulation with 4x the room.
+    capacity = min(4 * len(P) + 64, 1 << 16)
+    for _ in range(8):
+        tri, nbr, con, vt, ntri, dup_of = ghost_delaunay(P)
+        dups = np.flatnonzero(dup_of >= 0)
+        if dups.size and not allow_duplicates:
+            k = int(dups[0])
+            raise GeometryError(f"point {k} duplicates point {int(dup_of[k])}")
+        status, s, v = recover_segments(P, tri, nbr, con, vt, ntri, S, capacity)
+        if status != ERR_STACK or capacity >= 4 * len(P) + 64:
+            break
+        capacity *= 4
     if status != OK:
         where = f" (segment {s} = {tuple(int(x) for x in S[s])}"
         where += f", vertex {v})" if status == ERR_VERTEX_ON_SEGMENT else ")"
