@@ -25,7 +25,9 @@ same terms in the same order: ``skin=inf`` (no pruning) gives the same bits.
 Boundary nodes and their radii never change.  Interior nodes never leave the
 domain: a move is accepted only if an exact visibility walk in the (fixed) §2
 mesh reaches the target without touching the boundary; otherwise the step is
-halved, up to 4 times, and the node stays if none fits.  Updates are Jacobi
+halved, up to 4 times, and the node stays if none fits.  A target closer to
+the node's §2 position than half a lower bound on that position's distance to
+the boundary is inside without a walk (the disc of that radius is).  Updates are Jacobi
 (every node reads the previous iterate), so the parallel kernel gives the same
 bits as a serial run.
 """
@@ -115,6 +117,22 @@ def ring_neighbors(ptr, idx, n, rings):
             hi = end
         out_ptr[i + 1] = m
     return out_ptr, out[:m]  # a view: copying would double the peak memory
+
+
+def boundary_clearance(points, segments, n_boundary):
+    """Half a lower bound on each node's distance to the boundary: the distance
+    to the nearest segment midpoint minus half the longest segment (a point of
+    segment s is within L_s / 2 of its midpoint).  0 for boundary nodes."""
+    from scipy.spatial import cKDTree
+
+    ends = points[segments]
+    midpoints = ends.mean(axis=1)
+    longest = float(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1).max())
+    clearance = np.zeros(len(points))
+    if len(points) > n_boundary:
+        nearest, _ = cKDTree(midpoints).query(points[n_boundary:])
+        clearance[n_boundary:] = 0.5 * np.maximum(nearest - 0.5 * longest, 0.0)
+    return clearance
 
 
 def vertex_triangles(triangles, n):
@@ -212,7 +230,7 @@ def walk_inside(P0, tri0, nbr0, start, px, py, max_steps):
 
 @njit(cache=True, parallel=True)
 def _move(X, R, Xn, home, home_n, ring_ptr, ring_idx, n_boundary, alpha, P0, tri0, nbr0, disp,
-          stuck):
+          stuck, clearance):
     """(b) eq. 7-8 for every interior node, moves kept inside the domain."""
     n = X.shape[0]
     for i in prange(n_boundary, n):
@@ -235,7 +253,10 @@ def _move(X, R, Xn, home, home_n, ring_ptr, ring_idx, n_boundary, alpha, P0, tri
         for _ in range(MAX_HALVINGS + 1):
             tx = X[i, 0] + step * fx
             ty = X[i, 1] + step * fy
-            t = walk_inside(P0, tri0, nbr0, home[i], tx, ty, 4 * tri0.shape[0] + 8)
+            if (tx - P0[i, 0]) ** 2 + (ty - P0[i, 1]) ** 2 < clearance[i] ** 2:
+                t = home[i]  # deep inside: no walk needed, the old start stays valid
+            else:
+                t = walk_inside(P0, tri0, nbr0, home[i], tx, ty, 4 * tri0.shape[0] + 8)
             if t >= 0:
                 Xn[i, 0] = tx
                 Xn[i, 1] = ty
@@ -288,6 +309,7 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
     X = P0.copy()
     R = np.asarray(mesh.radii, dtype=np.float64) * amplification
     home = vertex_triangles(tri0, n)
+    clearance = boundary_clearance(P0, np.asarray(mesh.segments), n_b)
     Xn, Rn, home_n = X.copy(), R.copy(), home.copy()
     disp = np.zeros(n)
     stuck = np.zeros(n, np.bool_)
@@ -297,7 +319,8 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
     while iterations < max_iterations:
         iterations += 1
         vptr, vidx = lists.valid_for(X, R)
-        _move(X, R, Xn, home, home_n, vptr, vidx, n_b, alpha, P0, tri0, nbr0, disp, stuck)
+        _move(X, R, Xn, home, home_n, vptr, vidx, n_b, alpha, P0, tri0, nbr0, disp, stuck,
+              clearance)
         blocked += int(stuck.sum())
         vptr, vidx = lists.valid_for(Xn, R)
         _resize(Xn, R, Rn, vptr, vidx, n_b)
