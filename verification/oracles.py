@@ -685,6 +685,59 @@ def domain_location(P, loops, q) -> int:
     return 1
 
 
+def locate_centroids(points, triangles, loops, P=None, exact=False) -> np.ndarray:
+    """domain_location of every triangle's centroid: +1 inside the domain,
+    0 on a loop, -1 outside.  ``loops[0]`` is the outer loop.
+
+    The exact answer, fast: a vectorised float crossing-number test decides
+    every centroid whose decisions are certain (each y comparison farther than
+    the centroid's rounding error ``delta``, each orientation larger than its
+    error bound); the few uncertain ones are re-decided exactly (integer
+    arithmetic on 3x the coordinates).  ``exact=True`` decides all exactly
+    (slow; used to test the fast path)."""
+    pts = np.asarray(points, dtype=np.float64)
+    tri = _as_triangles(triangles)
+    if P is None:
+        P, _ = exact_integers(pts)
+    P3 = [(3 * x, 3 * y) for x, y in P]
+
+    def exact_at(t):
+        a, b, c = tri[t].tolist()
+        g = (P[a][0] + P[b][0] + P[c][0], P[a][1] + P[b][1] + P[c][1])
+        return domain_location(P3, loops, g)
+
+    if exact:
+        return np.array([exact_at(t) for t in range(len(tri))], dtype=np.int64)
+    q = (pts[tri[:, 0]] + pts[tri[:, 1]] + pts[tri[:, 2]]) / 3.0
+    qx, qy = q[:, 0], q[:, 1]
+    eps = np.finfo(np.float64).eps
+    mag = float(np.max(np.abs(pts))) if len(pts) else 0.0
+    delta = 8 * eps * mag + 1e-300  # |float centroid - exact centroid| per coordinate
+    uncertain = np.zeros(len(tri), dtype=bool)
+    inside = []
+    for loop in loops:
+        ins = np.zeros(len(tri), dtype=bool)
+        for i in range(len(loop)):
+            p1 = pts[loop[i]]
+            p2 = pts[loop[(i + 1) % len(loop)]]
+            dy1, dy2 = p1[1] - qy, p2[1] - qy
+            uncertain |= (np.abs(dy1) <= delta) | (np.abs(dy2) <= delta)
+            straddle = (p1[1] > qy) != (p2[1] > qy)
+            ex, ey = p2[0] - p1[0], p2[1] - p1[1]
+            u, w = ex * (qy - p1[1]), ey * (qx - p1[0])
+            o = u - w
+            err = 2 * (abs(ex) + abs(ey)) * delta + 4 * eps * (np.abs(u) + np.abs(w))
+            uncertain |= straddle & (np.abs(o) <= err)
+            ins ^= straddle & ((o > 0) == (p2[1] > p1[1]))
+        inside.append(ins)
+    out = np.where(inside[0], 1, -1).astype(np.int64)
+    for ins in inside[1:]:
+        out[ins] = -1
+    for t in np.nonzero(uncertain)[0]:
+        out[t] = exact_at(int(t))
+    return out
+
+
 def split_outer(P, loops) -> list[list[int]]:
     """Order loops as [outer, holes...]: the outer loop is the one with the
     largest absolute area (it encloses the others in a valid domain)."""
@@ -763,10 +816,9 @@ def check_conforming(points, triangles, segments, area=None, rel=1e-12) -> dict:
 
     P, _shift = exact_integers(pts)
     loops = split_outer(P, loops_from_segments(seg))
-    P3 = [(3 * x, 3 * y) for x, y in P]
+    where_all = locate_centroids(pts, tri, loops, P)
     for t, (a, b, c) in enumerate(tri.tolist()):
-        g = (P[a][0] + P[b][0] + P[c][0], P[a][1] + P[b][1] + P[c][1])
-        where = domain_location(P3, loops, g)
+        where = where_all[t]
         if where <= 0:
             kind = (
                 "outside the domain (outside the outer loop or inside a hole)"

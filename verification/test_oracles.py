@@ -257,3 +257,29 @@ def test_population_reference_on_equal_radii():
     pts = np.array([[0, 0], [1, 0], [0, 1], [1, 1]], dtype=float)
     area = O.population_bubble_area(pts, [[0, 1, 2], [1, 3, 2]], [0.2] * 4)
     assert area == pytest.approx(2 * math.pi * 0.04)
+
+
+@pytest.mark.peers
+@given(S.domains(max_holes=3))
+def test_fast_centroid_location_equals_exact(case):
+    """The vectorised float path of locate_centroids agrees with the exact
+    one, here on Triangle's triangulation of the convex hull (holes filled),
+    so centroids lie inside, in holes and outside the outer loop."""
+    triangle = pytest.importorskip("triangle")
+    pts, seg = _pslg(case)
+    out = triangle.triangulate({"vertices": pts, "segments": seg}, "pcYY")
+    tri = O.ccw_triangles(pts, out["triangles"])
+    P, _ = O.exact_integers(pts)
+    loops = O.split_outer(P, O.loops_from_segments(seg))
+    fast = O.locate_centroids(pts, tri, loops, P)
+    assert np.array_equal(fast, O.locate_centroids(pts, tri, loops, P, exact=True))
+
+
+def test_centroid_exactly_on_a_loop_is_found():
+    pts = np.array([[0, 0], [3, 0], [3, 3], [0, 3], [0, -1], [1, 1], [2, 0], [1, 2]], float)
+    loops = [[0, 1, 2, 3]]
+    P, _ = O.exact_integers(pts)
+    tri = np.array([[4, 6, 5], [5, 6, 7], [0, 1, 4]])  # centroids (1,0) on, (1,1) in, below
+    got = O.locate_centroids(pts, tri, loops, P)
+    assert got.tolist() == [0, 1, -1]
+    assert got.tolist() == O.locate_centroids(pts, tri, loops, P, exact=True).tolist()
