@@ -379,7 +379,7 @@ def _with_near_duplicates(draw, base):
     """Copies of some points moved by 1 ulp in x and/or y (np.nextafter).
     Zero coordinates are not moved (their next float is subnormal, outside
     the range where the library promises exact predicates; see
-    test_triangulation.test_delaunay_subnormal_coordinates)."""
+    test_triangulation.test_delaunay_refuses_coordinates_outside_the_exact_range)."""
     case = draw(base)
     p = case.points
     k = draw(st.integers(1, max(1, len(p) // 2)))
@@ -464,7 +464,7 @@ def cocircular_quadruples(draw, perturb: bool = True):
     optionally the fourth moved by 1-3 ulps (nearly cocircular), optionally
     scaled by 2^-k (still exact).  A zero coordinate is not moved (its next
     float is subnormal, outside the predicates' documented range; that case
-    is test_predicates.test_incircle_subnormal_perturbation)."""
+    is test_predicates.test_subnormal_quadruple_is_refused_by_the_kernel)."""
     idx = draw(st.lists(st.integers(0, len(CIRCLE_325) - 1), min_size=4, max_size=4, unique=True))
     pts = [list(CIRCLE_325[i]) for i in idx]
     if perturb and draw(st.booleans()):

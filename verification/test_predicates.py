@@ -16,6 +16,7 @@ import strategies as S
 from hypothesis import example, given
 from hypothesis import strategies as st
 
+import bubblemesh as bm
 from bubblemesh.predicates import incircle, orient2d
 
 
@@ -155,13 +156,12 @@ def test_predicates_accept_numpy_scalars():
     assert orient2d(x, x, 12.0, 12.0, 24.0, 24.0) == 0
 
 
-@pytest.mark.xfail(
-    strict=False,
-    reason="reported to the lead: a subnormal coordinate underflows the exact "
-    "fallback (outside the documented range, but bm.delaunay accepts such input)",
-)
-def test_incircle_subnormal_perturbation():
-    """Found by the thorough profile: d is outside the circle by 5e-324 in y."""
+def test_subnormal_quadruple_is_refused_by_the_kernel():
+    """Found by the thorough profile: incircle underflows when d is outside
+    the circle by 5e-324 in y (it returns 0, the exact sign is -1).  Such
+    coordinates are outside the predicates' documented exact range (nonzero
+    |x| in [2**-100, 2**100]), so the kernel must refuse them up front."""
     a, b, c, d = (-325.0, 0.0), (-323.0, -36.0), (-323.0, 36.0), (325.0, 5e-324)
     assert O.incircle_sign(*a, *b, *c, *d) == -1
-    assert _sign(incircle(*a, *b, *c, *d)) == -1
+    with pytest.raises(bm.GeometryError, match="point 3"):
+        bm.delaunay(np.array([a, b, c, d]))
