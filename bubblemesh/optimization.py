@@ -297,7 +297,12 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
     less than ``tol`` times its radius, or after ``max_iterations``.  Returns a
     new :class:`Mesh`; ``stats`` gains ``iterations``, ``max_displacement``
     (relative to the radius, last iteration), ``blocked_moves`` (node moves,
-    summed over iterations, that found no step inside the domain) and ``optimize_seconds``."""
+    summed over iterations, that found no step inside the domain),
+    ``list_builds`` and ``optimize_seconds``.  ``skin`` only trades Verlet-list
+    rebuilds against list length; the result does not depend on it (module
+    docstring).  The returned ``radii`` are the §3 bubbles: every radius
+    amplified (§3.1), the boundary ones then fixed, the interior ones from
+    eq. 9 (the paper's panel (d), "optimised node bubbles")."""
     start = time.perf_counter()
     n_b = mesh.n_boundary
     P0 = np.ascontiguousarray(mesh.points)

@@ -24,16 +24,18 @@ def radius_ratio(points, triangles):
 
 
 def angles(points, triangles):
-    """Interior angles in degrees, (M, 3): column i is the angle at vertex i."""
-    a, b, c = _side_lengths(points, triangles)
-    sides = np.stack([a, b, c], axis=1)
-    out = np.empty_like(sides)
+    """Interior angles in degrees, (M, 3): column i is the angle at vertex i.
+
+    atan2(|cross|, dot) of the two edge vectors stays accurate on needles, where
+    arccos of the law of cosines loses every digit."""
+    p = np.asarray(points, dtype=np.float64)[np.asarray(triangles)]
+    out = np.empty(p.shape[:2])
     for i in range(3):
-        opp = sides[:, i]
-        s1 = sides[:, (i + 1) % 3]
-        s2 = sides[:, (i + 2) % 3]
-        cos = np.clip((s1**2 + s2**2 - opp**2) / (2 * s1 * s2), -1.0, 1.0)
-        out[:, i] = np.degrees(np.arccos(cos))
+        u = p[:, (i + 1) % 3] - p[:, i]
+        v = p[:, (i + 2) % 3] - p[:, i]
+        cross = np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])
+        dot = u[:, 0] * v[:, 0] + u[:, 1] * v[:, 1]
+        out[:, i] = np.degrees(np.arctan2(cross, dot))
     return out
 
 
