@@ -228,6 +228,14 @@ def walk_inside(P0, tri0, nbr0, start, px, py, max_steps):
 # --- (b)-(d) the iterations ------------------------------------------------------------
 
 
+@njit(cache=True, inline="always")
+def _separation(X, i, j):
+    """(dx, dy, l_ij): the vector from node j to node i and its length."""
+    dx = X[i, 0] - X[j, 0]
+    dy = X[i, 1] - X[j, 1]
+    return dx, dy, np.sqrt(dx * dx + dy * dy)
+
+
 @njit(cache=True, parallel=True)
 def _move(X, R, Xn, home, home_n, ring_ptr, ring_idx, n_boundary, alpha, P0, tri0, nbr0, disp,
           stuck, clearance):
@@ -238,9 +246,7 @@ def _move(X, R, Xn, home, home_n, ring_ptr, ring_idx, n_boundary, alpha, P0, tri
         fy = 0.0
         for e in range(ring_ptr[i], ring_ptr[i + 1]):
             j = ring_idx[e]
-            dx = X[i, 0] - X[j, 0]
-            dy = X[i, 1] - X[j, 1]
-            length = np.sqrt(dx * dx + dy * dy)
+            dx, dy, length = _separation(X, i, j)
             overlap = R[i] + R[j] - length
             if overlap > 0.0 and length > 0.0:
                 fx += overlap * dx / length
@@ -278,9 +284,7 @@ def _resize(X, R, Rn, ring_ptr, ring_idx, n_boundary):
         den = 0.0
         for e in range(ring_ptr[i], ring_ptr[i + 1]):
             j = ring_idx[e]
-            dx = X[i, 0] - X[j, 0]
-            dy = X[i, 1] - X[j, 1]
-            length = np.sqrt(dx * dx + dy * dy)
+            _, _, length = _separation(X, i, j)
             if R[j] + R[i] > length and length > 0.0:
                 num += R[j] / length
                 den += 1.0 / length

@@ -413,6 +413,19 @@ def _find_edge(tri, nbr, vt, a, b, max_steps):
     return -1, -1
 
 
+@njit(cache=True, inline="always")
+def _push_edges(stack_t, stack_i, top, t, n):
+    """Stack the 6 edges of the two triangles a flip just rebuilt."""
+    for m in range(3):
+        stack_t[top] = t
+        stack_i[top] = m
+        top += 1
+        stack_t[top] = n
+        stack_i[top] = m
+        top += 1
+    return top
+
+
 @njit(cache=True)
 def _lawson(P, tri, nbr, con, vt, stack_t, stack_i, top, max_flips):
     """Flip every non-locally-Delaunay unconstrained edge reachable from the
@@ -439,13 +452,7 @@ def _lawson(P, tri, nbr, con, vt, stack_t, stack_i, top, max_flips):
         flips += 1
         if flips > max_flips or top + 6 > stack_t.shape[0]:
             return ERR_STACK
-        for m in range(3):
-            stack_t[top] = t
-            stack_i[top] = m
-            top += 1
-            stack_t[top] = n
-            stack_i[top] = m
-            top += 1
+        top = _push_edges(stack_t, stack_i, top, t, n)
     return OK
 
 
@@ -541,13 +548,7 @@ def recover_segment(P, tri, nbr, con, vt, a, b, qu, qw, stack_t, stack_i, max_st
             _flip(tri, nbr, con, vt, t, i)
             if top + 6 > stack_t.shape[0]:
                 return ERR_STACK, a
-            for m in range(3):
-                stack_t[top] = t
-                stack_i[top] = m
-                top += 1
-                stack_t[top] = n
-                stack_i[top] = m
-                top += 1
+            top = _push_edges(stack_t, stack_i, top, t, n)
             o1 = _orient(P, a, b, q1)
             o2 = _orient(P, a, b, q2)
             if (o1 > 0.0 and o2 < 0.0) or (o1 < 0.0 and o2 > 0.0):
