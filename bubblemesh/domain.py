@@ -27,7 +27,7 @@ import numpy.typing as npt
 from numba import njit
 
 from bubblemesh.errors import GeometryError
-from bubblemesh.predicates import MAX_COORDINATE, MIN_COORDINATE, orient2d, out_of_range
+from bubblemesh.predicates import orient2d, out_of_range, out_of_range_message
 
 __all__ = ["Domain"]
 
@@ -239,11 +239,7 @@ def _checked_ring(ring, k: int) -> np.ndarray:
     outside = out_of_range(ring)
     if outside.any():
         node = int(np.argmax(outside))
-        raise GeometryError(
-            f"{name} node {node} = {tuple(map(float, ring[node]))} has a coordinate outside "
-            f"the exact predicates' range (0 or {MIN_COORDINATE:.3g} to {MAX_COORDINATE:.3g} in "
-            "magnitude); rescale the geometry"
-        )
+        raise GeometryError(f"{name} node {node} = {out_of_range_message(ring[node])}")
     ring = _open_ring(ring)
     if len(ring) < 3:
         raise GeometryError(f"{name} has {len(ring)} distinct nodes; a loop needs at least 3")

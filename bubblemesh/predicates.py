@@ -45,6 +45,15 @@ def out_of_range(points):
     return bad.any(axis=-1)
 
 
+def out_of_range_message(point):
+    """'(x, y) has a coordinate outside ...': the reason ``out_of_range`` flagged it."""
+    return (
+        f"{tuple(map(float, point))} has a coordinate outside the exact predicates' range "
+        f"(0 or {MIN_COORDINATE:.3g} to {MAX_COORDINATE:.3g} in magnitude, finite); "
+        "rescale the geometry"
+    )
+
+
 # --- error-free transformations -------------------------------------------------
 
 

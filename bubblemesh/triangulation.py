@@ -29,7 +29,7 @@ import numpy as np
 from numba import njit
 
 from .errors import GeometryError, MeshingError
-from .predicates import MAX_COORDINATE, MIN_COORDINATE, incircle, orient2d, out_of_range
+from .predicates import incircle, orient2d, out_of_range, out_of_range_message
 
 GHOST = -1
 
@@ -725,11 +725,7 @@ def _as_points(points):
     bad = out_of_range(P)
     if bad.any():
         k = int(np.argmax(bad))
-        raise GeometryError(
-            f"point {k} = {tuple(map(float, P[k]))} has a coordinate that is not finite or "
-            f"not 0 or between {MIN_COORDINATE:.3g} and {MAX_COORDINATE:.3g} in magnitude, "
-            "where the exact predicates would overflow or underflow; rescale the input"
-        )
+        raise GeometryError(f"point {k} = {out_of_range_message(P[k])}")
     return P
 
 
