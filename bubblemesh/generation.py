@@ -49,6 +49,10 @@ NEED_CAPACITY = 3  # arrays full: the caller grows them and resumes
 CHUNK_DONE = 4  # a progress chunk is done: the caller reports and resumes
 ERR_EMPTY_QUEUE = -20
 
+# initial triangle capacity, as a multiple of the expected count (arrays double
+# when full, so this only trades memory against copies)
+INITIAL_CAPACITY = 1.1
+
 # integer state slots
 S_NPTS, S_NTRI, S_HEAP, S_INSERTIONS, S_STAMP, S_CAVITY = range(6)
 
@@ -279,7 +283,7 @@ class _Workspace:
         self.newt = np.zeros(t_cap + 2, np.int64)
         self.vstart = np.full(len(self.P) + 1, -1, np.int64)
 
-    def grow(self, size):
+    def grow(self):
         """Double every capacity, keeping contents (heap entries included)."""
         for name in ("P", "R", "vt", "tri", "nbr", "con", "r_e", "a_e", "density", "dead",
                      "heap"):
@@ -320,7 +324,7 @@ def generate(domain, *, max_insertions=None, progress=False):
     bound = _insertion_bound(area_geo, radii)
     limit = bound if max_insertions is None else min(int(max_insertions), bound)
     expected = int(area_geo / float(np.mean(math.pi * radii**2))) + len(tri)
-    t_cap = max(64, int(1.1 * expected) + 2 * len(tri))
+    t_cap = max(64, int(INITIAL_CAPACITY * expected) + 2 * len(tri))
     ws = _Workspace(points, radii, tri, nbr, len(points) + t_cap // 2 + 16, t_cap)
     acc = np.zeros(2)
     state = np.zeros(6, np.int64)
@@ -342,19 +346,28 @@ def generate(domain, *, max_insertions=None, progress=False):
 
 
 def _run(ws, state, acc, area_geo, limit, bar):
+    """Call the kernel until it stops; every call inserts at least one node or
+    follows a growth that did, so the loop ends within ``limit`` insertions."""
     chunk = 20000 if bar is not None else 1 << 62
+    grown_without_progress = False
     while True:
         before = int(state[S_INSERTIONS])
         status = insertion_loop(*ws.kernel_args(), state, acc, area_geo, limit, chunk,
                                 ws.mark, ws.cav, ws.bnd, ws.newt, ws.vstart)
+        progressed = int(state[S_INSERTIONS]) > before
         if bar is not None:
             bar.update(int(state[S_INSERTIONS]) - before)
         if status == NEED_CAPACITY:
-            ws.grow(state[S_HEAP])
+            if grown_without_progress and not progressed:
+                raise MeshingError("generation: the arrays grew but no insertion followed")
+            grown_without_progress = not progressed
+            ws.grow()
         elif status == CHUNK_DONE:
             continue
         elif status < 0:
-            raise MeshingError(f"generation: {_MESSAGES.get(status, status)}")
+            message = "priority queue ran empty" if status == ERR_EMPTY_QUEUE else (
+                _MESSAGES.get(status, status))
+            raise MeshingError(f"generation: {message}")
         else:
             return status
 

@@ -161,3 +161,19 @@ def test_generate_fine_graded_domain():
     mesh = bm.generate(_domain(case))
     check_mesh_geometry(case, mesh)
     check_population(case, mesh)
+
+
+def test_capacity_growth_gives_the_same_mesh(monkeypatch):
+    """The arrays start at 1/1000 of the expected size and double many times
+    while the queue, the cavity scratch and the insertion state are carried over:
+    the mesh must be the one a single allocation gives."""
+    from bubblemesh import generation
+
+    case = S.square_with_hole()
+    dom = bm.Domain.from_loops(case.loops)
+    reference = bm.generate(dom)
+    monkeypatch.setattr(generation, "INITIAL_CAPACITY", 0.001)
+    grown = bm.generate(dom)
+    assert np.array_equal(grown.points, reference.points)
+    assert np.array_equal(grown.triangles, reference.triangles)
+    assert grown.bubble_area == reference.bubble_area
