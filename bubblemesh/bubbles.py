@@ -5,7 +5,8 @@
 * eq. 3: an element bubble sits at the triangle's centroid e; its radius is the
   reciprocal-distance interpolation r_e = sum(r_k / l_ke) / sum(1 / l_ke) of the
   vertex radii, l_ke = |x_k - x_e|.
-* eq. 4: A_e = pi r_e^2.      * eq. 5: D_e = A_e / A_m, A_m the triangle's area.
+* eq. 4: A_e = pi r_e^2.      * eq. 5: D_e = A_e / A_m, A_m the triangle's area
+  (applied per triangle inside the §2 kernel, generation._bubble).
 """
 
 import math
@@ -45,27 +46,3 @@ def element_radius(ax, ay, ra, bx, by, rb, cx, cy, rc):
 def triangle_area(ax, ay, bx, by, cx, cy):
     """A_m of eq. 5 (positive for counter-clockwise triangles)."""
     return 0.5 * ((bx - ax) * (cy - ay) - (by - ay) * (cx - ax))
-
-
-@njit(cache=True)
-def element_bubbles(points, triangles, radii):
-    """Eq. 3-5 for every triangle: (r_e, A_e, D_e) arrays."""
-    m = triangles.shape[0]
-    r_e = np.empty(m)
-    a_e = np.empty(m)
-    d_e = np.empty(m)
-    for t in range(m):
-        a = triangles[t, 0]
-        b = triangles[t, 1]
-        c = triangles[t, 2]
-        r, _, _ = element_radius(
-            points[a, 0], points[a, 1], radii[a],
-            points[b, 0], points[b, 1], radii[b],
-            points[c, 0], points[c, 1], radii[c],
-        )
-        r_e[t] = r
-        a_e[t] = math.pi * r * r
-        d_e[t] = a_e[t] / triangle_area(
-            points[a, 0], points[a, 1], points[b, 0], points[b, 1], points[c, 0], points[c, 1]
-        )
-    return r_e, a_e, d_e

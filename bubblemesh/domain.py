@@ -561,6 +561,8 @@ def _chain_segments(
         visited[start] = True
         previous, current = start, int(neighbours[start].min())
         while current != start:
+            if len(chain) >= n:  # cannot happen when every degree is 2; never loop on
+                raise GeometryError(f"the segments through {where(start)} do not close")
             chain.append(current)
             visited[current] = True
             a, b = neighbours[current]

@@ -316,6 +316,8 @@ def generate(domain, *, max_insertions=None, progress=False):
     bar.  Returns a :class:`Mesh` whose ``stats`` hold ``insertions``,
     ``bubble_area`` (sum A_e), ``domain_area`` (A_geo) and ``stop`` ("population"
     or "max_insertions")."""
+    if max_insertions is not None and int(max_insertions) < 0:
+        raise ValueError(f"max_insertions must be >= 0, got {max_insertions}")
     start = time.perf_counter()
     points = np.asarray(domain.points, dtype=np.float64)
     tri, nbr = constrained_delaunay(points, domain.segments)  # (a)

@@ -307,6 +307,8 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
     docstring).  The returned ``radii`` are the §3 bubbles: every radius
     amplified (§3.1), the boundary ones then fixed, the interior ones from
     eq. 9 (the paper's panel (d), "optimised node bubbles")."""
+    _check_parameters(amplification=amplification, alpha=alpha, skin=skin, rings=rings,
+                      max_iterations=max_iterations, tol=tol)
     start = time.perf_counter()
     n_b = mesh.n_boundary
     P0 = np.ascontiguousarray(mesh.points)
@@ -349,6 +351,22 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
                  rings=rings, alpha=alpha, list_builds=lists.builds)
     return Mesh(points=X, triangles=triangles, neighbors=neighbors, radii=R,
                 segments=mesh.segments, n_boundary=n_b, domain=mesh.domain, stats=stats)
+
+
+def _check_parameters(*, amplification, alpha, skin, rings, max_iterations, tol):
+    """ValueError naming the first parameter outside its meaningful range."""
+    rules = [
+        ("amplification", amplification, amplification > 0, "> 0"),
+        ("alpha", alpha, alpha > 0, "> 0"),
+        ("skin", skin, skin > 0, "> 0 (inf disables the lists)"),
+        ("rings", rings, int(rings) == rings and rings >= 1, "an integer >= 1"),
+        ("max_iterations", max_iterations, int(max_iterations) == max_iterations
+         and max_iterations >= 0, "an integer >= 0"),
+        ("tol", tol, tol >= 0, ">= 0"),
+    ]
+    for name, value, ok, expected in rules:
+        if not ok:
+            raise ValueError(f"optimize: {name} must be {expected}, got {value!r}")
 
 
 class _Lists:

@@ -35,7 +35,6 @@ GHOST = -1
 
 # status codes returned by the kernels
 OK = 0
-ERR_DUPLICATE = -1
 ERR_NOT_STAR = -2
 ERR_CAPACITY = -3
 ERR_WALK = -4
@@ -45,7 +44,6 @@ ERR_RECOVERY = -7
 ERR_STACK = -8
 
 _MESSAGES = {
-    ERR_DUPLICATE: "duplicate point",
     ERR_NOT_STAR: "cavity is not star-shaped (internal invariant failed)",
     ERR_CAPACITY: "triangle capacity exceeded",
     ERR_WALK: "point location walk exceeded its bound",
@@ -731,7 +729,7 @@ def _as_points(points):
 
 def _raise(status, what, where=""):
     msg = f"{what}: {_MESSAGES.get(status, status)}{where}"
-    if status in (ERR_COLLINEAR, ERR_DUPLICATE, ERR_VERTEX_ON_SEGMENT):
+    if status in (ERR_COLLINEAR, ERR_VERTEX_ON_SEGMENT):
         raise GeometryError(msg)
     raise MeshingError(msg)
 
@@ -765,7 +763,7 @@ def delaunay(points):
     return np.ascontiguousarray(tri[:ntri][real])
 
 
-def constrained_delaunay(points, segments, *, allow_duplicates=False):
+def constrained_delaunay(points, segments):
     """Constrained Delaunay triangulation of the region enclosed by ``segments``
     (paper §2.1 and §3.5): triangles outside the outer loop and inside holes are
     removed by the parity of segments crossed from infinity.
@@ -782,7 +780,7 @@ def constrained_delaunay(points, segments, *, allow_duplicates=False):
     for _ in range(8):
         tri, nbr, con, vt, ntri, dup_of = ghost_delaunay(P)
         dups = np.flatnonzero(dup_of >= 0)
-        if dups.size and not allow_duplicates:
+        if dups.size:
             k = int(dups[0])
             raise GeometryError(f"point {k} duplicates point {int(dup_of[k])}")
         status, s, v = recover_segments(P, tri, nbr, con, vt, ntri, S, capacity)

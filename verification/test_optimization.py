@@ -115,3 +115,19 @@ def test_optimize_square_with_hole():
     case = S.square_with_hole()
     before, after = _optimize_pair(case)
     check_optimization_invariants(case, before, after)
+
+
+@pytest.mark.parametrize(
+    "option, value",
+    [("amplification", 0.0), ("alpha", -0.1), ("skin", 0.0), ("rings", 0), ("rings", 1.5),
+     ("max_iterations", -1), ("tol", -1e-3)],
+)
+def test_optimize_rejects_meaningless_parameters(option, value):
+    mesh = bm.generate(bm.Domain.from_loops(S.disk(24).loops))
+    with pytest.raises(ValueError, match=f"optimize: {option} must be"):
+        bm.optimize(mesh, **{option: value})
+
+
+def test_generate_rejects_negative_max_insertions():
+    with pytest.raises(ValueError, match="max_insertions must be >= 0"):
+        bm.generate(bm.Domain.from_loops(S.disk(24).loops), max_insertions=-1)
