@@ -243,13 +243,18 @@ def _separation(X, i, j):
 
 
 @njit(cache=True, parallel=True)
-def _move(X, R, Xn, home, home_n, ring_ptr, ring_idx, n_boundary, alpha, P0, tri0, nbr0, disp,
-          stuck, clearance, X0, R0, skin):
+def _move(X, R, Xn, home, ring_ptr, ring_idx, n_boundary, alpha, P0, tri0, nbr0, clearance,
+          X0, R0, skin):
     """(b) eq. 7-8 for every interior node, moves kept inside the domain.
-    Returns how many moved nodes outgrew the lists built at (X0, R0)."""
-    n = X.shape[0]
+
+    ``home[i]`` (a §2 triangle holding node i) is node i's own, so it is
+    updated in place.  Returns how many nodes outgrew the lists built at
+    (X0, R0), how many pushed nodes found no step inside the domain, and the
+    largest move relative to the node's radius."""
     expired = 0
-    for i in prange(n_boundary, n):
+    blocked = 0
+    largest = 0.0
+    for i in prange(n_boundary, X.shape[0]):
         fx = 0.0
         fy = 0.0
         for e in range(ring_ptr[i], ring_ptr[i + 1]):
@@ -260,12 +265,10 @@ def _move(X, R, Xn, home, home_n, ring_ptr, ring_idx, n_boundary, alpha, P0, tri
             scale = overlap / length if overlap > 0.0 and length > 0.0 else 0.0
             fx += scale * dx
             fy += scale * dy
-        step = alpha
         Xn[i, 0] = X[i, 0]
         Xn[i, 1] = X[i, 1]
-        home_n[i] = home[i]
-        stuck[i] = fx != 0.0 or fy != 0.0
-        for _ in range(MAX_HALVINGS + 1):
+        step = alpha
+        for attempt in range(MAX_HALVINGS + 1 if fx != 0.0 or fy != 0.0 else 0):
             tx = X[i, 0] + step * fx
             ty = X[i, 1] + step * fy
             if (tx - P0[i, 0]) ** 2 + (ty - P0[i, 1]) ** 2 < clearance[i] ** 2:
@@ -275,16 +278,17 @@ def _move(X, R, Xn, home, home_n, ring_ptr, ring_idx, n_boundary, alpha, P0, tri
             if t >= 0:
                 Xn[i, 0] = tx
                 Xn[i, 1] = ty
-                home_n[i] = t
-                stuck[i] = False
+                home[i] = t
                 break
+            if attempt == MAX_HALVINGS:
+                blocked += 1
             step *= 0.5
         dx = Xn[i, 0] - X[i, 0]
         dy = Xn[i, 1] - X[i, 1]
-        disp[i] = np.sqrt(dx * dx + dy * dy) / R[i]
+        largest = max(largest, np.sqrt(dx * dx + dy * dy) / R[i])
         if _outgrew(Xn, R, X0, R0, i, skin):
             expired += 1
-    return expired
+    return expired, blocked, largest
 
 
 @njit(cache=True, parallel=True)
@@ -338,9 +342,7 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
     home = vertex_triangles(tri0, n)
     clearance = boundary_clearance(P0, np.asarray(mesh.segments), n_b,
                                    reach=4.0 * float(R.max(initial=0.0)))
-    Xn, Rn, home_n = X.copy(), R.copy(), home.copy()
-    disp = np.zeros(n)
-    stuck = np.zeros(n, np.bool_)
+    Xn, Rn = X.copy(), R.copy()
     iterations, largest, blocked = 0, 0.0, 0
     bar = _progress_bar(progress, max_iterations)
     lists = _Lists(ring_ptr, ring_idx, n_b, skin)
@@ -349,15 +351,14 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
         iterations += 1
         if expired:
             lists.build(X, R)
-        expired = _move(X, R, Xn, home, home_n, lists.ptr, lists.idx, n_b, alpha, P0, tri0,
-                        nbr0, disp, stuck, clearance, lists.X0, lists.R0, lists.skin) > 0
-        blocked += int(stuck.sum())
+        expired, stuck, largest = _move(X, R, Xn, home, lists.ptr, lists.idx, n_b, alpha, P0,
+                                        tri0, nbr0, clearance, lists.X0, lists.R0, lists.skin)
+        blocked += stuck
         if expired:
             lists.build(Xn, R)
         expired = _resize(Xn, R, Rn, lists.ptr, lists.idx, n_b, lists.X0, lists.R0,
                           lists.skin) > 0
-        X, Xn, R, Rn, home, home_n = Xn, X, Rn, R, home_n, home
-        largest = float(disp[n_b:].max()) if n > n_b else 0.0
+        X, Xn, R, Rn = Xn, X, Rn, R
         if bar is not None:
             bar.update(1)
             bar.set_postfix(max_move=f"{largest:.2e}")
@@ -367,7 +368,7 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
         bar.close()
     builds = lists.builds
     # not needed by the re-triangulation: freed to lower the peak memory
-    del lists, ring_ptr, ring_idx, Xn, Rn, home, home_n, clearance, disp, stuck
+    del lists, ring_ptr, ring_idx, Xn, Rn, home, clearance
     triangles, neighbors = _retriangulate(X, mesh.segments)
     stats = dict(mesh.stats)
     stats.update(iterations=iterations, max_displacement=largest, blocked_moves=blocked,
