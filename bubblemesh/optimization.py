@@ -159,37 +159,32 @@ def _closer_than(X, i, j, distance):
 
 
 @njit(cache=True, parallel=True)
-def _count_close(X, R, ring_ptr, ring_idx, n_boundary, skin, counts):
+def _fill_close(X, R, ring_ptr, ring_idx, n_boundary, skin, start, room, count, out):
+    """Node i's list, its ring neighbours within (1 + skin)(r_i + r_j) in ring
+    order, goes to out[start[i]:] if it fits in room[i] slots; count[i] is its
+    length either way.  Returns how many lists did not fit."""
+    overflow = 0
     for i in prange(n_boundary, X.shape[0]):
         c = 0
         for e in range(ring_ptr[i], ring_ptr[i + 1]):
             j = ring_idx[e]
             if _closer_than(X, i, j, (1.0 + skin) * (R[i] + R[j])):
+                if c < room[i]:
+                    out[start[i] + c] = j
                 c += 1
-        counts[i + 1] = c
+        count[i] = c
+        if c > room[i]:
+            overflow += 1
+    return overflow
 
 
-@njit(cache=True, parallel=True)
-def _fill_close(X, R, ring_ptr, ring_idx, n_boundary, skin, ptr, out):
-    for i in prange(n_boundary, X.shape[0]):
-        c = ptr[i]
-        for e in range(ring_ptr[i], ring_ptr[i + 1]):
-            j = ring_idx[e]
-            if _closer_than(X, i, j, (1.0 + skin) * (R[i] + R[j])):
-                out[c] = j
-                c += 1
-
-
-def verlet_lists(X, R, ring_ptr, ring_idx, n_boundary, skin):
-    """The ring neighbours that may overlap soon: CSR, ring order kept."""
-    if np.isinf(skin):
-        return ring_ptr, ring_idx
-    counts = np.zeros(len(X) + 1, np.int64)
-    _count_close(X, R, ring_ptr, ring_idx, n_boundary, skin, counts)
-    ptr = np.cumsum(counts)
-    out = np.empty(ptr[-1], np.int32)
-    _fill_close(X, R, ring_ptr, ring_idx, n_boundary, skin, ptr, out)
-    return ptr, out
+def _layout(count, spare):
+    """Slots for lists of ``count`` entries plus ``spare`` each: (start, room)."""
+    room = count + spare
+    room[count == 0] = 0
+    start = np.zeros(len(count), np.int64)
+    np.cumsum(room[:-1], out=start[1:])
+    return start, room
 
 
 @njit(cache=True, inline="always")
@@ -243,7 +238,7 @@ def _separation(X, i, j):
 
 
 @njit(cache=True, parallel=True)
-def _move(X, R, Xn, home, ring_ptr, ring_idx, n_boundary, alpha, P0, tri0, nbr0, clearance,
+def _move(X, R, Xn, home, start, count, nearby, n_boundary, alpha, P0, tri0, nbr0, clearance,
           X0, R0, skin):
     """(b) eq. 7-8 for every interior node, moves kept inside the domain.
 
@@ -257,9 +252,9 @@ def _move(X, R, Xn, home, ring_ptr, ring_idx, n_boundary, alpha, P0, tri0, nbr0,
     for i in prange(n_boundary, X.shape[0]):
         fx = 0.0
         fy = 0.0
-        for e in range(ring_ptr[i], ring_ptr[i + 1]):
-            dx, dy, length = _separation(X, i, ring_idx[e])
-            overlap = R[i] + R[ring_idx[e]] - length
+        for e in range(start[i], start[i] + count[i]):
+            dx, dy, length = _separation(X, i, nearby[e])
+            overlap = R[i] + R[nearby[e]] - length
             # a select, not a branch: about 40% of listed pairs do not overlap, and
             # mispredicting them cost half the kernel's time (measured)
             scale = overlap / length if overlap > 0.0 and length > 0.0 else 0.0
@@ -292,7 +287,7 @@ def _move(X, R, Xn, home, ring_ptr, ring_idx, n_boundary, alpha, P0, tri0, nbr0,
 
 
 @njit(cache=True, parallel=True)
-def _resize(X, R, Rn, ring_ptr, ring_idx, n_boundary, X0, R0, skin):
+def _resize(X, R, Rn, start, count, nearby, n_boundary, X0, R0, skin):
     """(c) eq. 9 for every interior node, from the nearby bubbles overlapping it.
     Returns how many resized nodes outgrew the lists built at (X0, R0)."""
     n = X.shape[0]
@@ -300,8 +295,8 @@ def _resize(X, R, Rn, ring_ptr, ring_idx, n_boundary, X0, R0, skin):
     for i in prange(n_boundary, n):
         num = 0.0
         den = 0.0
-        for e in range(ring_ptr[i], ring_ptr[i + 1]):
-            j = ring_idx[e]
+        for e in range(start[i], start[i] + count[i]):
+            j = nearby[e]
             _, _, length = _separation(X, i, j)
             weight = 1.0 / length if R[j] + R[i] > length and length > 0.0 else 0.0
             num += R[j] * weight
@@ -351,13 +346,12 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
         iterations += 1
         if expired:
             lists.build(X, R)
-        expired, stuck, largest = _move(X, R, Xn, home, lists.ptr, lists.idx, n_b, alpha, P0,
-                                        tri0, nbr0, clearance, lists.X0, lists.R0, lists.skin)
+        expired, stuck, largest = _move(X, R, Xn, home, *lists.arrays, n_b, alpha, P0, tri0,
+                                        nbr0, clearance, lists.X0, lists.R0, lists.skin)
         blocked += stuck
         if expired:
             lists.build(Xn, R)
-        expired = _resize(Xn, R, Rn, lists.ptr, lists.idx, n_b, lists.X0, lists.R0,
-                          lists.skin) > 0
+        expired = _resize(Xn, R, Rn, *lists.arrays, n_b, lists.X0, lists.R0, lists.skin) > 0
         X, Xn, R, Rn = Xn, X, Rn, R
         if bar is not None:
             bar.update(1)
@@ -366,14 +360,14 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
             break
     if bar is not None:
         bar.close()
-    builds = lists.builds
+    builds, layouts = lists.builds, lists.layouts
     # not needed by the re-triangulation: freed to lower the peak memory
     del lists, ring_ptr, ring_idx, Xn, Rn, home, clearance
     triangles, neighbors = _retriangulate(X, mesh.segments)
     stats = dict(mesh.stats)
     stats.update(iterations=iterations, max_displacement=largest, blocked_moves=blocked,
                  optimize_seconds=time.perf_counter() - start, amplification=amplification,
-                 rings=rings, alpha=alpha, list_builds=builds)
+                 rings=rings, alpha=alpha, list_builds=builds, list_layouts=layouts)
     return Mesh(points=X, triangles=triangles, neighbors=neighbors, radii=R,
                 segments=mesh.segments, n_boundary=n_b, domain=mesh.domain, stats=stats)
 
@@ -395,17 +389,37 @@ def _check_parameters(*, amplification, alpha, skin, rings, max_iterations, tol)
 
 
 class _Lists:
-    """Verlet lists over the fixed ring sets and the state (X0, R0) they were
-    built at; the kernels report when a node outgrows them."""
+    """Verlet lists over the fixed ring sets, and the state (X0, R0) they were
+    built at; the kernels report when a node outgrows them.
+
+    Each node's list sits in its own slots, with ``SPARE`` free ones, so a
+    rebuild is one pass over the rings; only when some list outgrows its slots
+    are they laid out afresh from the new lengths and filled again (the
+    counting pass a packed CSR would need every time)."""
+
+    SPARE = 4  # at 1M elements: 3 layouts in 16 builds (2 spare slots: 16 in 16)
 
     def __init__(self, ring_ptr, ring_idx, n_boundary, skin):
         self.ring_ptr, self.ring_idx = ring_ptr, ring_idx
         self.n_boundary, self.skin = n_boundary, float(skin)
-        self.builds = 0
+        n = len(ring_ptr) - 1
+        if np.isinf(self.skin):  # no pruning: the rings themselves
+            self.arrays = (ring_ptr[:-1], np.diff(ring_ptr), ring_idx)
+        else:
+            self.arrays = (np.zeros(n, np.int64), np.zeros(n, np.int64), np.empty(0, np.int32))
+        self.room = np.zeros(n, np.int64)
+        self.builds = self.layouts = 0
 
     def build(self, X, R):
-        self.ptr, self.idx = verlet_lists(X, R, self.ring_ptr, self.ring_idx,
-                                          self.n_boundary, self.skin)
+        if not np.isinf(self.skin):
+            start, count, out = self.arrays
+            args = (X, R, self.ring_ptr, self.ring_idx, self.n_boundary, self.skin)
+            if _fill_close(*args, start, self.room, count, out) > 0:
+                start, self.room = _layout(count, self.SPARE)
+                out = np.empty(int(start[-1] + self.room[-1]), np.int32)
+                _fill_close(*args, start, self.room, count, out)
+                self.layouts += 1
+            self.arrays = (start, count, out)
         self.X0, self.R0 = X.copy(), R.copy()
         self.builds += 1
 
