@@ -148,3 +148,33 @@ def test_optimize_rejects_meaningless_parameters(option, value):
 def test_generate_rejects_negative_max_insertions():
     with pytest.raises(ValueError, match="max_insertions must be >= 0"):
         bm.generate(bm.Domain.from_loops(S.disk(24).loops), max_insertions=-1)
+
+
+@pytest.mark.parametrize("per_node", [48, 2])
+def test_ring_neighbors_are_graph_balls(per_node):
+    """§3.3's nearby nodes: node i's list holds exactly the nodes at 1..3 edges
+    from i (graph distances from scipy's csgraph, on edges taken from the
+    triangles), each once, nearer rings first.  ~2,400 nodes, so the work is
+    split into blocks; per_node=2 forces the overflow restart."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import shortest_path
+
+    from bubblemesh.optimization import node_adjacency, ring_neighbors
+
+    mesh = bm.generate(bm.Domain.from_loops(S.disk(160).loops))
+    n = len(mesh.points)
+    edges = np.concatenate([mesh.triangles[:, [0, 1]], mesh.triangles[:, [1, 2]],
+                            mesh.triangles[:, [2, 0]]])
+    graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
+    hops = shortest_path(graph.tocsr(), directed=False, unweighted=True)
+    ptr, idx = ring_neighbors(*node_adjacency(mesh.triangles, mesh.neighbors, n), n, 3,
+                              per_node=per_node)
+    assert n > 2048
+    for i in range(n):
+        ring = idx[ptr[i]:ptr[i + 1]]
+        d = hops[i, ring]
+        assert len(np.unique(ring)) == len(ring), f"node {i}: a neighbour twice"
+        assert np.all((d >= 1) & (d <= 3)), f"node {i}: a neighbour {d.max()} edges away"
+        assert np.all(np.diff(d) >= 0), f"node {i}: rings out of order"
+        assert len(ring) == np.count_nonzero((hops[i] >= 1) & (hops[i] <= 3)), (
+            f"node {i}: missing neighbours")
