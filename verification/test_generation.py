@@ -177,3 +177,22 @@ def test_capacity_growth_gives_the_same_mesh(monkeypatch):
     assert np.array_equal(grown.points, reference.points)
     assert np.array_equal(grown.triangles, reference.triangles)
     assert grown.bubble_area == reference.bubble_area
+
+
+def test_wide_ids_give_the_same_mesh(monkeypatch):
+    """Runs too big for int32 ids use int64 ones: forced here on a small domain
+    (the threshold set to 0), the mesh must be the int32 run's, bit for bit;
+    and a narrow run that would outgrow int32 stops with a MeshingError."""
+    from bubblemesh import generation
+
+    dom = bm.Domain.from_loops(S.square_with_hole().loops)
+    narrow = bm.generate(dom)
+    monkeypatch.setattr(generation, "INT32_MAX", 0)
+    wide = bm.generate(dom)
+    for name in ("points", "triangles", "neighbors", "radii"):
+        assert np.array_equal(getattr(wide, name), getattr(narrow, name)), name
+    ws = generation._Workspace(narrow.points[:4], narrow.radii[:4], narrow.triangles[:2],
+                               narrow.neighbors[:2], n_cap=64, t_cap=64)
+    monkeypatch.setattr(generation, "INT32_MAX", 4 * 64)
+    with pytest.raises(bm.MeshingError, match="id type"):
+        ws.grow()
