@@ -60,6 +60,7 @@ S_NPTS, S_NTRI, S_HEAP, S_INSERTIONS, S_STAMP, S_CAVITY = range(6)
 # --- 4-ary heap of (key, id) rows in one array, ordered by key then id -------------------
 
 INT32_MAX = int(np.iinfo(np.int32).max)  # above it, ids are int64
+UNSPLITTABLE = -1.0  # density mark of a triangle too thin to split; no D_e is negative
 HEAP_ARITY = 4  # half the depth of a binary heap; 4 rows of 16 bytes fill one cache line
 
 
@@ -118,8 +119,8 @@ def heap_pop(heap, size):
 
 
 @njit(cache=True)
-def _bubble(P, R, tri, t, r_e, a_e):
-    """Eq. 3-5 for triangle t: stores r_e, A_e and returns D_e."""
+def _bubble(P, R, tri, t, r_e):
+    """Eq. 3-5 for triangle t: stores r_e and returns D_e."""
     a = tri[t, 0]
     b = tri[t, 1]
     c = tri[t, 2]
@@ -127,8 +128,15 @@ def _bubble(P, R, tri, t, r_e, a_e):
         P[a, 0], P[a, 1], R[a], P[b, 0], P[b, 1], R[b], P[c, 0], P[c, 1], R[c]
     )
     r_e[t] = r
-    a_e[t] = math.pi * r * r
-    return a_e[t] / triangle_area(P[a, 0], P[a, 1], P[b, 0], P[b, 1], P[c, 0], P[c, 1])
+    area = triangle_area(P[a, 0], P[a, 1], P[b, 0], P[b, 1], P[c, 0], P[c, 1])
+    return _bubble_area(r_e, t) / area
+
+
+@njit(cache=True, inline="always")
+def _bubble_area(r_e, t):
+    """A_e, eq. 4: recomputed from r_e rather than stored (one array less to
+    miss in cache per cavity triangle)."""
+    return math.pi * r_e[t] * r_e[t]
 
 
 @njit(cache=True, inline="always")
@@ -141,29 +149,29 @@ def _accumulate(acc, x):
 
 
 @njit(cache=True)
-def init_queue(P, R, tri, ntri, r_e, a_e, density, heap, acc):
+def init_queue(P, R, tri, ntri, r_e, density, heap, acc):
     """Step (b): bubbles of the initial triangles, their sum, the queue."""
     size = 0
     for t in range(ntri):
-        density[t] = _bubble(P, R, tri, t, r_e, a_e)
-        _accumulate(acc, a_e[t])
+        density[t] = _bubble(P, R, tri, t, r_e)
+        _accumulate(acc, _bubble_area(r_e, t))
         size = heap_push(heap, size, density[t], t)
     return size
 
 
 @njit(cache=True)
-def _rebuild_queue(ntri, density, dead, heap):
+def _rebuild_queue(ntri, density, heap):
     """Drop stale heap entries: push every live, splittable triangle afresh."""
     size = 0
     for t in range(ntri):
-        if not dead[t]:
+        if density[t] != UNSPLITTABLE:
             size = heap_push(heap, size, density[t], t)
     return size
 
 
 @njit(cache=True)
 def insertion_loop(
-    P, R, tri, nbr, con, vt, r_e, a_e, density, dead, heap,
+    P, R, tri, nbr, con, vt, r_e, density, heap,
     state, acc, area_geo, max_insertions, chunk,
     mark, cav, bnd, newt, vstart,
 ):
@@ -189,7 +197,7 @@ def insertion_loop(
             status = NEED_CAPACITY
             break
         if size + ntri + 2 > heap.shape[0]:
-            size = _rebuild_queue(ntri, density, dead, heap)
+            size = _rebuild_queue(ntri, density, heap)
             if size + ntri + 2 > heap.shape[0]:
                 status = NEED_CAPACITY
                 break
@@ -198,7 +206,7 @@ def insertion_loop(
         while size > 0:
             size = heap_pop(heap, size)
             cand = int(heap[size, 1])
-            if heap[size, 0] == density[cand] and not dead[cand]:
+            if heap[size, 0] == density[cand]:  # else stale (or UNSPLITTABLE)
                 t = cand
                 break
         if t < 0:
@@ -215,7 +223,7 @@ def insertion_loop(
             or orient2d(P[b, 0], P[b, 1], P[c, 0], P[c, 1], ex, ey) <= 0.0
             or orient2d(P[c, 0], P[c, 1], P[a, 0], P[a, 1], ex, ey) <= 0.0
         ):
-            dead[t] = True  # too thin to split in floating point: leave it
+            density[t] = UNSPLITTABLE  # too thin to split in floating point: leave it
             continue
         # (e) Bowyer-Watson insertion from t
         state[S_STAMP] += 1
@@ -229,7 +237,7 @@ def insertion_loop(
         P[npts, 1] = ey
         R[npts] = r_e[t]
         for k in range(ncav):
-            _accumulate(acc, -a_e[cav[k]])
+            _accumulate(acc, -_bubble_area(r_e, cav[k]))
         status, ntri_new = fill_cavity(
             P, npts, tri, nbr, con, vt, ntri, cav, ncav, bnd, nb, vstart, newt
         )
@@ -239,9 +247,8 @@ def insertion_loop(
         npts += 1
         for k in range(nb):
             s = newt[k]
-            dead[s] = False
-            density[s] = _bubble(P, R, tri, s, r_e, a_e)
-            _accumulate(acc, a_e[s])
+            density[s] = _bubble(P, R, tri, s, r_e)
+            _accumulate(acc, _bubble_area(r_e, s))
             size = heap_push(heap, size, density[s], s)
         state[S_INSERTIONS] += 1
         done += 1
@@ -276,9 +283,7 @@ class _Workspace:
         self.nbr[:m0] = nbr
         self.con = np.zeros((t_cap, 3), np.uint8)
         self.r_e = np.zeros(t_cap)
-        self.a_e = np.zeros(t_cap)
         self.density = np.zeros(t_cap)
-        self.dead = np.zeros(t_cap, np.bool_)
         self.heap = np.zeros((2 * t_cap, 2))
         self._scratch()
 
@@ -294,8 +299,7 @@ class _Workspace:
         """Double every capacity, keeping contents (heap entries included)."""
         if self.index == np.int32 and not _fits_int32(2 * len(self.tri)):
             raise MeshingError("generation: more triangles than the id type holds")
-        for name in ("P", "R", "vt", "tri", "nbr", "con", "r_e", "a_e", "density", "dead",
-                     "heap"):
+        for name in ("P", "R", "vt", "tri", "nbr", "con", "r_e", "density", "heap"):
             old = getattr(self, name)
             new = np.zeros((2 * old.shape[0],) + old.shape[1:], old.dtype)
             new[: old.shape[0]] = old
@@ -306,8 +310,8 @@ class _Workspace:
         self.mark[:] = 0
 
     def kernel_args(self):
-        return (self.P, self.R, self.tri, self.nbr, self.con, self.vt, self.r_e, self.a_e,
-                self.density, self.dead, self.heap)
+        return (self.P, self.R, self.tri, self.nbr, self.con, self.vt, self.r_e, self.density,
+                self.heap)
 
 
 def _fits_int32(t_cap):
@@ -348,7 +352,7 @@ def generate(domain, *, max_insertions=None, progress=False):
     state = np.zeros(6, np.int64)
     state[S_NPTS] = len(points)
     state[S_NTRI] = len(tri)
-    state[S_HEAP] = init_queue(ws.P, ws.R, ws.tri, len(tri), ws.r_e, ws.a_e, ws.density,
+    state[S_HEAP] = init_queue(ws.P, ws.R, ws.tri, len(tri), ws.r_e, ws.density,
                                ws.heap, acc)
     bar = _progress_bar(progress, expected // 2)
     try:
