@@ -24,7 +24,6 @@ bound raises MeshingError instead of looping.
 """
 
 import math
-import time
 
 import numpy as np
 from numba import njit
@@ -33,6 +32,7 @@ from .bubbles import boundary_radii, element_radius, triangle_area
 from .errors import MeshingError
 from .mesh import Mesh
 from .predicates import orient2d
+from .timing import PhaseClock
 from .triangulation import (
     _MESSAGES,
     OK,
@@ -334,12 +334,14 @@ def generate(domain, *, max_insertions=None, progress=False):
     population criterion can be checked from outside.  ``progress`` shows a tqdm
     bar.  Returns a :class:`Mesh` whose ``stats`` hold ``insertions``,
     ``bubble_area`` (sum A_e), ``domain_area`` (A_geo) and ``stop`` ("population"
-    or "max_insertions")."""
+    or "max_insertions") and ``phases`` (seconds in boundary_cdt, setup,
+    insertion, renumbering)."""
     if max_insertions is not None and int(max_insertions) < 0:
         raise ValueError(f"max_insertions must be >= 0, got {max_insertions}")
-    start = time.perf_counter()
+    clock = PhaseClock()
     points = np.asarray(domain.points, dtype=np.float64)
     tri, nbr = constrained_delaunay(points, domain.segments)  # (a)
+    clock.lap("boundary_cdt")
     radii = boundary_radii(points, domain.loops)  # (b) eq. 1-2
     area_geo = float(domain.area)
     bound = _insertion_bound(area_geo, radii)
@@ -355,15 +357,19 @@ def generate(domain, *, max_insertions=None, progress=False):
     state[S_HEAP] = init_queue(ws.P, ws.R, ws.tri, len(tri), ws.r_e, ws.density,
                                ws.heap, acc)
     bar = _progress_bar(progress, expected // 2)
+    clock.lap("setup")
     try:
         status = _run(ws, state, acc, area_geo, limit, bar)
     finally:
         if bar is not None:
             bar.close()
+    clock.lap("insertion")
     if status == STOP_MAX_INSERTIONS and (max_insertions is None or limit < max_insertions):
         raise MeshingError(f"generation reached its insertion bound {bound} without eq. 6")
     mesh = _as_mesh(domain, ws, state, acc, radii, status, 0.0)
-    mesh.stats["seconds"] = time.perf_counter() - start
+    clock.lap("renumbering")
+    mesh.stats["seconds"] = clock.total()
+    mesh.stats["phases"] = clock.seconds
     return mesh
 
 

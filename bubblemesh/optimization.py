@@ -33,7 +33,6 @@ bits as a serial run.
 """
 
 import os
-import time
 
 import numba
 import numpy as np
@@ -42,6 +41,7 @@ from numba import njit, prange
 from .errors import GeometryError, MeshingError
 from .mesh import Mesh
 from .predicates import orient2d
+from .timing import PhaseClock
 from .triangulation import constrained_delaunay
 
 MAX_HALVINGS = 4
@@ -355,20 +355,23 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
     new :class:`Mesh`; ``stats`` gains ``iterations``, ``max_displacement``
     (relative to the radius, last iteration), ``blocked_moves`` (node moves,
     summed over iterations, that found no step inside the domain),
-    ``list_builds`` and ``optimize_seconds``.  ``skin`` only trades Verlet-list
-    rebuilds against list length; the result does not depend on it (module
+    ``list_builds``, ``list_layouts``, ``optimize_seconds`` and
+    ``optimize_phases`` (seconds in rings, setup, lists, move, resize,
+    retriangulation).  ``skin`` only trades Verlet-list rebuilds against list
+    length; the result does not depend on it (module
     docstring).  The returned ``radii`` are the §3 bubbles: every radius
     amplified (§3.1), the boundary ones then fixed, the interior ones from
     eq. 9 (the paper's panel (d), "optimised node bubbles")."""
     _check_parameters(amplification=amplification, alpha=alpha, skin=skin, rings=rings,
                       max_iterations=max_iterations, tol=tol)
-    start = time.perf_counter()
+    clock = PhaseClock()
     n_b = mesh.n_boundary
     P0 = np.ascontiguousarray(mesh.points)
     tri0 = np.ascontiguousarray(mesh.triangles)
     nbr0 = np.ascontiguousarray(mesh.neighbors)
     n = len(P0)
     ring_ptr, ring_idx = ring_neighbors(*node_adjacency(tri0, nbr0, n), n, int(rings))
+    clock.lap("rings")
     X = P0.copy()
     R = np.asarray(mesh.radii, dtype=np.float64) * amplification
     home = vertex_triangles(tri0, n)
@@ -379,16 +382,21 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
     bar = _progress_bar(progress, max_iterations)
     lists = _Lists(ring_ptr, ring_idx, n_b, skin)
     expired = True  # no lists yet
+    clock.lap("setup")
     while iterations < max_iterations:
         iterations += 1
         if expired:
             lists.build(X, R)
+            clock.lap("lists")
         expired, stuck, largest = _move(X, R, Xn, home, *lists.arrays, n_b, alpha, P0, tri0,
                                         nbr0, clearance, lists.X0, lists.R0, lists.skin)
         blocked += stuck
+        clock.lap("move")
         if expired:
             lists.build(Xn, R)
+            clock.lap("lists")
         expired = _resize(Xn, R, Rn, *lists.arrays, n_b, lists.X0, lists.R0, lists.skin) > 0
+        clock.lap("resize")
         X, Xn, R, Rn = Xn, X, Rn, R
         if bar is not None:
             bar.update(1)
@@ -401,10 +409,12 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
     # not needed by the re-triangulation: freed to lower the peak memory
     del lists, ring_ptr, ring_idx, Xn, Rn, home, clearance
     triangles, neighbors = _retriangulate(X, mesh.segments)
+    clock.lap("retriangulation")
     stats = dict(mesh.stats)
     stats.update(iterations=iterations, max_displacement=largest, blocked_moves=blocked,
-                 optimize_seconds=time.perf_counter() - start, amplification=amplification,
-                 rings=rings, alpha=alpha, list_builds=builds, list_layouts=layouts)
+                 optimize_seconds=clock.total(), optimize_phases=clock.seconds,
+                 amplification=amplification, rings=rings, alpha=alpha, list_builds=builds,
+                 list_layouts=layouts)
     return Mesh(points=X, triangles=triangles, neighbors=neighbors, radii=R,
                 segments=mesh.segments, n_boundary=n_b, domain=mesh.domain, stats=stats)
 

@@ -90,13 +90,16 @@ def _child_bubblemesh(n, repeats):
     base = _rss_mb()
     dom = bm.Domain.from_loops(_disk(n))
     gen = []
+    m = o = None
     for _ in range(repeats):
+        m = None  # each repetition starts without the last one's mesh: the peak is one run's
         t0 = time.perf_counter()
         m = bm.generate(dom)
         gen.append(time.perf_counter() - t0)
     peak_gen = _rss_mb()
     opt, tot = [], []
     for _ in range(repeats):
+        m = o = None
         t0 = time.perf_counter()
         m = bm.generate(dom)
         t1 = time.perf_counter()
@@ -108,6 +111,8 @@ def _child_bubblemesh(n, repeats):
     peak = _rss_mb()
     ne = len(m.triangles)
     note = f"optimize: {o.stats.get('iterations', '?')} iterations"
+    gen_phases = _phases(m.stats.get("phases", {}))
+    opt_phases = _phases(o.stats.get("optimize_phases", {}))
     return [
         dict(
             method="bubblemesh_generate",
@@ -115,7 +120,7 @@ def _child_bubblemesh(n, repeats):
             seconds=min(gen),
             peak_mb=peak_gen,
             peak_delta_mb=peak_gen - base,
-            note="peak over generate-only repetitions",
+            note=f"peak over generate-only repetitions; last run's phases: {gen_phases}",
         ),
         dict(
             method="bubblemesh_optimize",
@@ -123,7 +128,7 @@ def _child_bubblemesh(n, repeats):
             seconds=min(opt),
             peak_mb=peak,
             peak_delta_mb=peak - base,
-            note=note + "; peak of the whole pipeline",
+            note=note + f"; peak of the whole pipeline; last run's phases: {opt_phases}",
         ),
         dict(
             method="bubblemesh_total",
@@ -134,6 +139,11 @@ def _child_bubblemesh(n, repeats):
             note="generate + optimize",
         ),
     ]
+
+
+def _phases(seconds: dict) -> str:
+    """'name 1.23 s, ...' from a stats phase dict (where the time goes)."""
+    return ", ".join(f"{k} {v:.3g} s" for k, v in seconds.items())
 
 
 def _child_triangle(n, repeats, target):

@@ -1,0 +1,22 @@
+"""Wall-clock seconds per phase of a run, reported in ``Mesh.stats`` so that a
+user (and the benchmark, issue 6) can see where the time goes.  Not part of
+the paper's method."""
+
+import time
+
+
+class PhaseClock:
+    """``lap(phase)`` adds the time since the previous lap (or the start) to
+    ``phase``; ``seconds`` maps each phase to its total."""
+
+    def __init__(self):
+        self.seconds = {}
+        self._last = self._start = time.perf_counter()
+
+    def lap(self, phase):
+        now = time.perf_counter()
+        self.seconds[phase] = self.seconds.get(phase, 0.0) + now - self._last
+        self._last = now
+
+    def total(self):
+        return self._last - self._start
