@@ -704,13 +704,36 @@ def _hilbert_keys(P, bits):
     return keys
 
 
+@njit(cache=True)
+def _radix_argsort(keys, digits):
+    """Stable argsort of non-negative keys below 2**(16 digits): least
+    significant 16 bits first (what np.argsort(kind="stable") gives, in O(n))."""
+    n = keys.shape[0]
+    order = np.arange(n)
+    spare = np.empty(n, np.int64)
+    count = np.empty(65537, np.int64)
+    for d in range(digits):
+        shift = 16 * d
+        count[:] = 0
+        for k in range(n):
+            count[((keys[order[k]] >> shift) & 0xFFFF) + 1] += 1
+        for b in range(65536):
+            count[b + 1] += count[b]
+        for k in range(n):
+            digit = (keys[order[k]] >> shift) & 0xFFFF
+            spare[count[digit]] = order[k]
+            count[digit] += 1
+        order, spare = spare, order
+    return order
+
+
 def hilbert_order(points):
     """Insertion order along a Hilbert curve: each new point lands next to the
     previous one, so the walking point location takes O(1) steps on average."""
     if len(points) == 0:
         return np.zeros(0, np.int64)
     keys = _hilbert_keys(np.ascontiguousarray(points, dtype=np.float64), 16)
-    return np.argsort(keys, kind="stable").astype(np.int64)
+    return _radix_argsort(keys, 2)  # keys < 4**16
 
 
 # --- Python wrappers ----------------------------------------------------------------
