@@ -261,53 +261,82 @@ def insertion_loop(
 # --- Python driver -------------------------------------------------------------------
 
 
+# Records: per triangle, every field the insertion loop touches shares one
+# cache line (64 bytes with int32 ids); per node, its position, radius and the
+# two id fields share half a line.  (name, dtype, byte offset, width).
+_TRIANGLE_FIELDS = {
+    np.int32: (64, [("tri", "i4", 0, 3), ("nbr", "i4", 12, 3), ("con", "i4", 24, 3),
+                    ("mark", "i4", 36, 1), ("density", "f8", 40, 1), ("r_e", "f8", 48, 1)]),
+    np.int64: (128, [("tri", "i8", 0, 3), ("nbr", "i8", 24, 3), ("con", "i8", 48, 3),
+                     ("mark", "i8", 72, 1), ("density", "f8", 80, 1), ("r_e", "f8", 88, 1)]),
+}
+_NODE_FIELDS = {
+    np.int32: (32, [("P", "f8", 0, 2), ("R", "f8", 16, 1), ("vt", "i4", 24, 1),
+                    ("vstart", "i4", 28, 1)]),
+    np.int64: (64, [("P", "f8", 0, 2), ("R", "f8", 16, 1), ("vt", "i8", 24, 1),
+                    ("vstart", "i8", 32, 1)]),
+}
+_UNSET = {"nbr": -1, "vt": -1, "vstart": -1}  # initial value if not 0
+
+
+def _records(rows, record_bytes, fields):
+    """Zeroed, cache-line-aligned records; returns {name: strided view}."""
+    buf = np.zeros(rows * record_bytes + 64, np.uint8)
+    skip = -buf.ctypes.data % 64
+    table = buf[skip:skip + rows * record_bytes].reshape(rows, record_bytes)
+    views = {}
+    for name, dtype, offset, width in fields:
+        words = table.view(dtype)
+        col = offset // words.itemsize
+        views[name] = words[:, col:col + width] if width > 1 else words[:, col]
+        if name in _UNSET:
+            views[name][:] = _UNSET[name]
+    return views
+
+
 class _Workspace:
     """The growable arrays of one generation run (capacity doubles on demand).
 
-    Triangle and node ids, and the cavity stamps (one per insertion), are
-    int32: the insertion loop is bound by memory latency, and halving the
-    id arrays made it 4-9% faster at 1M elements (measured); ids are widened
-    to int64 in the returned mesh.  Runs that could pass 2**31 - 1 use int64."""
+    The loop waits on memory: each insertion visits a few triangles and nodes
+    at random places of arrays far larger than the cache.  So a triangle's
+    vertex and neighbour ids, constraint flags, cavity stamp, density and
+    element bubble are one record (one cache line), and a node's position,
+    radius and ids another; the kernels see them as strided views.  Ids and
+    stamps are int32 (widened to int64 in the returned mesh); runs that could
+    pass 2**31 - 1 use int64 records."""
 
     def __init__(self, points, radii, tri, nbr, n_cap, t_cap, wide=False):
         self.index = np.int64 if wide else np.int32
+        self._allocate(n_cap, t_cap)
         n0, m0 = len(points), len(tri)
-        self.P = np.zeros((n_cap, 2))
         self.P[:n0] = points
-        self.R = np.zeros(n_cap)
         self.R[:n0] = radii
-        self.vt = np.full(n_cap, -1, self.index)
-        self.tri = np.zeros((t_cap, 3), self.index)
         self.tri[:m0] = tri
-        self.nbr = np.full((t_cap, 3), -1, self.index)
         self.nbr[:m0] = nbr
-        self.con = np.zeros((t_cap, 3), np.uint8)
-        self.r_e = np.zeros(t_cap)
-        self.density = np.zeros(t_cap)
         self.heap = np.zeros((2 * t_cap, 2))
-        self._scratch()
 
-    def _scratch(self):
-        t_cap = len(self.tri)
-        self.mark = np.zeros(t_cap, self.index)
+    def _allocate(self, n_cap, t_cap):
+        nodes = _records(n_cap + 1, *_NODE_FIELDS[self.index])  # + the ghost's vstart slot
+        nodes["P"], nodes["R"], nodes["vt"] = (nodes[k][:n_cap] for k in ("P", "R", "vt"))
+        triangles = _records(t_cap, *_TRIANGLE_FIELDS[self.index])
+        for name, view in {**nodes, **triangles}.items():
+            setattr(self, name, view)
         self.cav = np.zeros(t_cap, self.index)
         self.bnd = np.zeros((t_cap + 2, 4), self.index)
         self.newt = np.zeros(t_cap + 2, self.index)
-        self.vstart = np.full(len(self.P) + 1, -1, self.index)
 
     def grow(self):
         """Double every capacity, keeping contents (heap entries included)."""
         if self.index == np.int32 and not _fits_int32(2 * len(self.tri)):
             raise MeshingError("generation: more triangles than the id type holds")
-        for name in ("P", "R", "vt", "tri", "nbr", "con", "r_e", "density", "heap"):
-            old = getattr(self, name)
-            new = np.zeros((2 * old.shape[0],) + old.shape[1:], old.dtype)
-            new[: old.shape[0]] = old
-            if name in ("vt", "nbr"):
-                new[old.shape[0]:] = -1
-            setattr(self, name, new)
-        self._scratch()
-        self.mark[:] = 0
+        names = ("P", "R", "vt", "tri", "nbr", "con", "r_e", "density")
+        old = {name: getattr(self, name) for name in names}
+        self._allocate(2 * len(self.P), 2 * len(self.tri))
+        for name in names:
+            getattr(self, name)[: len(old[name])] = old[name]
+        heap = np.zeros((2 * len(self.heap), 2))
+        heap[: len(self.heap)] = self.heap
+        self.heap = heap
 
     def kernel_args(self):
         return (self.P, self.R, self.tri, self.nbr, self.con, self.vt, self.r_e, self.density,
@@ -409,13 +438,24 @@ def _progress_bar(progress, total):
 
 
 @njit(cache=True)
-def _centroids(points, triangles):
-    out = np.empty((triangles.shape[0], 2))
-    for t in range(triangles.shape[0]):
-        for k in range(2):
-            out[t, k] = (points[triangles[t, 0], k] + points[triangles[t, 1], k]
-                         + points[triangles[t, 2], k]) / 3.0
-    return out
+def _by_lowest_node(triangles, new_of_old):
+    """Triangle order by their lowest renumbered node, ties in id order (a
+    counting sort): triangles then follow the nodes' Hilbert order."""
+    m = triangles.shape[0]
+    lowest = np.empty(m, np.int64)
+    first = np.zeros(new_of_old.shape[0] + 1, np.int64)
+    for t in range(m):
+        low = min(new_of_old[triangles[t, 0]], new_of_old[triangles[t, 1]],
+                  new_of_old[triangles[t, 2]])
+        lowest[t] = low
+        first[low + 1] += 1
+    for v in range(new_of_old.shape[0]):
+        first[v + 1] += first[v]
+    order = np.empty(m, np.int64)
+    for t in range(m):
+        order[first[lowest[t]]] = t
+        first[lowest[t]] += 1
+    return order
 
 
 @njit(cache=True)
@@ -437,7 +477,8 @@ def _permute_mesh(triangles, neighbors, new_of_old, tri_order):
 
 
 def spatial_renumbering(points, triangles, neighbors, n_fixed):
-    """Renumber nodes after ``n_fixed`` and all triangles along a Hilbert curve.
+    """Renumber nodes after ``n_fixed`` along a Hilbert curve, and triangles by
+    their lowest new node.
 
     §2 creates nodes in density order, scattered over the domain; neighbours
     that are far apart in memory make every later pass over the mesh (the §3
@@ -448,7 +489,7 @@ def spatial_renumbering(points, triangles, neighbors, n_fixed):
     old_of_new[n_fixed:] = n_fixed + hilbert_order(points[n_fixed:])
     new_of_old = np.empty(n, np.int64)
     new_of_old[old_of_new] = np.arange(n)
-    tri_order = hilbert_order(_centroids(points, triangles))
+    tri_order = _by_lowest_node(triangles, new_of_old)
     tri, nbr = _permute_mesh(triangles, neighbors, new_of_old, tri_order)
     return points[old_of_new], tri, nbr, old_of_new
 
@@ -457,7 +498,7 @@ def _as_mesh(domain, ws, state, acc, boundary, status, seconds):
     npts, ntri = int(state[S_NPTS]), int(state[S_NTRI])
     n_b = len(boundary)
     points, triangles, neighbors, order = spatial_renumbering(
-        ws.P[:npts], ws.tri[:ntri], ws.nbr[:ntri], n_b
+        ws.P[:npts], *(np.ascontiguousarray(a) for a in (ws.tri[:ntri], ws.nbr[:ntri])), n_b
     )
     stats = {
         "insertions": int(state[S_INSERTIONS]),
