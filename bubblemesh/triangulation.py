@@ -739,8 +739,16 @@ def hilbert_order(points):
 # --- Python wrappers ----------------------------------------------------------------
 
 
+def _writable(array, dtype):
+    """A contiguous, writable array: numba compiles a separate copy of every
+    kernel for read-only arrays (a frozen Mesh's), which doubled the cold
+    compile time of the triangulation."""
+    out = np.ascontiguousarray(array, dtype=dtype)
+    return out if out.flags.writeable else out.copy()
+
+
 def _as_points(points):
-    P = np.ascontiguousarray(points, dtype=np.float64)
+    P = _writable(points, np.float64)
     if P.ndim != 2 or P.shape[1] != 2:
         raise GeometryError(f"points must be an (N, 2) array, got shape {P.shape}")
     bad = out_of_range(P)
@@ -794,7 +802,7 @@ def constrained_delaunay(points, segments):
     Returns (triangles (M,3) int64 CCW, neighbors (M,3) int64, -1 across the
     domain boundary)."""
     P = _as_points(points)
-    S = np.ascontiguousarray(segments, dtype=np.int64).reshape(-1, 2)
+    S = _writable(segments, np.int64).reshape(-1, 2)
     if S.size and (S.min() < 0 or S.max() >= P.shape[0]):
         raise GeometryError("a segment refers to a point index out of range")
     # Stacks for a few thousand crossed edges per segment; a recovery that needs
