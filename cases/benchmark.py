@@ -121,6 +121,7 @@ def _child_bubblemesh(n, repeats):
             peak_mb=peak_gen,
             peak_delta_mb=peak_gen - base,
             note=f"peak over generate-only repetitions; last run's phases: {gen_phases}",
+            phases=m.stats.get("phases", {}),
         ),
         dict(
             method="bubblemesh_optimize",
@@ -129,6 +130,7 @@ def _child_bubblemesh(n, repeats):
             peak_mb=peak,
             peak_delta_mb=peak - base,
             note=note + f"; peak of the whole pipeline; last run's phases: {opt_phases}",
+            phases=o.stats.get("optimize_phases", {}),
         ),
         dict(
             method="bubblemesh_total",
@@ -144,6 +146,18 @@ def _child_bubblemesh(n, repeats):
 def _phases(seconds: dict) -> str:
     """'name 1.23 s, ...' from a stats phase dict (where the time goes)."""
     return ", ".join(f"{k} {v:.3g} s" for k, v in seconds.items())
+
+
+def _profile(rows) -> dict:
+    """Seconds per phase of the largest bubblemesh run (numba's default threads):
+    where the time goes."""
+    mine = [r for r in rows if r.get("method") in ("bubblemesh_generate", "bubblemesh_optimize")
+            and r.get("phases")]
+    if not mine:
+        return {}
+    largest = max(r["elements"] for r in mine)
+    return {r["method"]: {"elements": r["elements"], "phases": r["phases"]}
+            for r in mine if r["elements"] == largest}
 
 
 def _child_triangle(n, repeats, target):
@@ -498,6 +512,7 @@ def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress
             r.setdefault("elements", match if r["status"] != "ok" else None)
         rows += got
     df = pd.DataFrame(rows)
+    profile = _profile(rows)
     for c in COLUMNS:
         if c not in df:
             df[c] = None
@@ -525,6 +540,7 @@ def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress
         total_seconds=time.perf_counter() - t_start,
         load_average_start_end=[round(load_start[0], 2), round(os.getloadavg()[0], 2)],
         threads=_threading_info(),
+        profile=profile,
     )
     meta["targets"] = (
         [] if quick else check_targets(df, slopes, meta["compile"])

@@ -336,6 +336,11 @@ def _benchmark_notes(out: Path) -> list[str]:
             )
     if m.get("threads"):
         notes.append(f"numba threading in the children: {m['threads']}.")
+    for method, p in m.get("profile", {}).items():
+        total = sum(p["phases"].values())
+        parts = ", ".join(f"{k} {v:.3g} s ({100 * v / total:.0f}%)"
+                          for k, v in p["phases"].items())
+        notes.append(f"Where the time goes, {method} at {p['elements']} elements: {parts}.")
     for t in m.get("targets", []):
         notes.append(
             f"Issue-6 target {'met' if t['met'] else 'MISSED'}: {t['target']} "
