@@ -47,6 +47,7 @@ C_DISK = 0.1838  # bubblemesh §2 elements per (boundary nodes)² on the unit di
 TARGETS = (1_000, 3_000, 10_000, 30_000, 100_000, 300_000, 1_000_000)
 QUICK_TARGETS = (300, 1_000)
 GMSH_CAP = 200_000
+GMSH_COMPARE = 100_000  # the size of the "5x faster than Gmsh" target
 SLOPE_FROM = 10_000  # fit the log-log slope on sizes >= this
 COLUMNS = [
     "method",
@@ -148,6 +149,21 @@ def _phases(seconds: dict) -> str:
     return ", ".join(f"{k} {v:.3g} s" for k, v in seconds.items())
 
 
+def _iterations_tradeoff(df, targets, repeats) -> list[dict]:
+    """§3 iterations vs time and quality at the size nearest GMSH_COMPARE
+    elements, with the time as a speed-up over Gmsh Frontal there."""
+    size = min(targets, key=lambda t: abs(t - GMSH_COMPARE))
+    n = boundary_nodes_for(size)
+    rows = _run_child({"method": "bubblemesh_iterations", "n_boundary": n, "repeats": repeats},
+                      timeout=600 + 0.02 * size * repeats)
+    gmsh = df[(df.method == "gmsh_frontal") & (df.status == "ok") & (df.boundary_nodes == n)]
+    for r in rows:
+        if "seconds" in r and not gmsh.empty:
+            g = gmsh.iloc[0]
+            r["speedup_vs_gmsh"] = (g.seconds / g.elements) / (r["seconds"] / r["elements"])
+    return rows
+
+
 def _profile(rows) -> dict:
     """Seconds per phase of the largest bubblemesh run (numba's default threads):
     where the time goes."""
@@ -158,6 +174,32 @@ def _profile(rows) -> dict:
     largest = max(r["elements"] for r in mine)
     return {r["method"]: {"elements": r["elements"], "phases": r["phases"]}
             for r in mine if r["elements"] == largest}
+
+
+ITERATIONS = (25, 50, 100, 200, 400)  # the §3 trade-off measured at the Gmsh comparison size
+
+
+def _child_iterations(n, repeats):
+    """generate + optimize(max_iterations=k) for k in ITERATIONS: seconds (min
+    of ``repeats``) and the radius ratio of the result.  200 is the default;
+    the paper leaves the count open ("if more iterations are needed")."""
+    import bubblemesh as bm
+
+    bm.optimize(bm.generate(bm.Domain.from_loops(_disk(64))))
+    dom = bm.Domain.from_loops(_disk(n))
+    rows = []
+    for k in ITERATIONS:
+        best = float("inf")
+        for _ in range(repeats):
+            o = None
+            t0 = time.perf_counter()
+            o = bm.optimize(bm.generate(dom), max_iterations=k, tol=0.0)
+            best = min(best, time.perf_counter() - t0)
+        rho = o.quality()
+        rows.append(dict(iterations=k, elements=len(o.triangles), seconds=best,
+                         rho_mean=float(rho.mean()), rho_min=float(rho.min()),
+                         pct_below_0_7=float(100 * (rho < 0.7).mean())))
+    return rows
 
 
 def _child_triangle(n, repeats, target):
@@ -264,6 +306,8 @@ def _child(spec: dict) -> list[dict]:
     m, n, r = spec["method"], spec["n_boundary"], spec["repeats"]
     if m == "bubblemesh":
         return _child_bubblemesh(n, r)
+    if m == "bubblemesh_iterations":
+        return _child_iterations(n, r)
     if m == "triangle":
         return _child_triangle(n, r, spec["target"])
     if m == "gmsh_frontal":
@@ -406,7 +450,7 @@ def check_targets(df, slopes: dict, compile_: dict) -> list[dict]:
             bool(opt.ratio_to_triangle <= 10),
             "x Triangle",
         )
-    tot, gm = at("bubblemesh_total", 100_000), at("gmsh_frontal", 100_000)
+    tot, gm = at("bubblemesh_total", GMSH_COMPARE), at("gmsh_frontal", GMSH_COMPARE)
     if tot is not None and gm is not None:
         speedup = (gm.seconds / gm.elements) / (tot.seconds / tot.elements)
         add(
@@ -513,6 +557,7 @@ def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress
         rows += got
     df = pd.DataFrame(rows)
     profile = _profile(rows)
+    tradeoff = [] if quick else _iterations_tradeoff(df, targets, repeats)
     for c in COLUMNS:
         if c not in df:
             df[c] = None
@@ -541,6 +586,7 @@ def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress
         load_average_start_end=[round(load_start[0], 2), round(os.getloadavg()[0], 2)],
         threads=_threading_info(),
         profile=profile,
+        iterations_tradeoff=tradeoff,
     )
     meta["targets"] = (
         [] if quick else check_targets(df, slopes, meta["compile"])

@@ -336,6 +336,16 @@ def _benchmark_notes(out: Path) -> list[str]:
             )
     if m.get("threads"):
         notes.append(f"numba threading in the children: {m['threads']}.")
+    trade = [r for r in m.get("iterations_tradeoff", []) if "seconds" in r]
+    if trade:
+        parts = "; ".join(
+            f"{r['iterations']}: {r['seconds']:.3g} s"
+            + (f" ({r['speedup_vs_gmsh']:.2f}x Gmsh's speed)" if "speedup_vs_gmsh" in r else "")
+            + f", mean ρ {r['rho_mean']:.4f}, min {r['rho_min']:.3f}, "
+            f"{r['pct_below_0_7']:.2f}% < 0.7"
+            for r in trade)
+        notes.append(f"§3 iterations vs time and quality, generate + optimize at "
+                     f"{trade[0]['elements']} elements (the default is 200): {parts}.")
     for method, p in m.get("profile", {}).items():
         total = sum(p["phases"].values())
         parts = ", ".join(f"{k} {v:.3g} s ({100 * v / total:.0f}%)"
