@@ -274,10 +274,23 @@ def _separation(X, i, j):
     return dx, dy, np.sqrt(dx * dx + dy * dy)
 
 
+@njit(cache=True, inline="always")
+def _inverse_separation(X, i, j):
+    """(dx, dy, 1 / l_ij) from node j to node i; 0 for coincident nodes."""
+    dx, dy, length = _separation(X, i, j)
+    return dx, dy, 1.0 / length if length > 0.0 else 0.0
+
+
 @njit(cache=True, parallel=True)
-def _move(X, R, Xn, home, start, count, nearby, n_boundary, alpha, P0, tri0, nbr0, clearance,
-          X0, R0, skin):
+def _move(X, R, Xn, home, start, count, nearby, inverse, reuse, n_boundary, alpha, P0, tri0,
+          nbr0, clearance, X0, R0, skin):
     """(b) eq. 7-8 for every interior node, moves kept inside the domain.
+
+    The overlap term of eq. 8 is (r_i + r_j - l) / l = (r_i + r_j) / l - 1.
+    The previous eq. 9 pass already evaluated 1 / l at these very positions
+    and stored it per list entry (``inverse``); when ``reuse`` (the lists
+    have not been rebuilt since), the square root and division are skipped,
+    with the same bits as computing them again.
 
     ``home[i]`` (a §2 triangle holding node i) is node i's own, so it is
     updated in place.  Returns how many nodes outgrew the lists built at
@@ -290,11 +303,17 @@ def _move(X, R, Xn, home, start, count, nearby, n_boundary, alpha, P0, tri0, nbr
         fx = 0.0
         fy = 0.0
         for e in range(start[i], start[i] + count[i]):
-            dx, dy, length = _separation(X, i, nearby[e])
-            overlap = R[i] + R[nearby[e]] - length
+            j = nearby[e]
+            if reuse:
+                dx = X[i, 0] - X[j, 0]
+                dy = X[i, 1] - X[j, 1]
+                w = inverse[e]
+            else:
+                dx, dy, w = _inverse_separation(X, i, j)
+            scale = (R[i] + R[j]) * w - 1.0  # 0 for coincident nodes (w = 0)
             # a select, not a branch: about 40% of listed pairs do not overlap, and
             # mispredicting them cost half the kernel's time (measured)
-            scale = overlap / length if overlap > 0.0 and length > 0.0 else 0.0
+            scale = scale if scale > 0.0 else 0.0
             fx += scale * dx
             fy += scale * dy
         Xn[i, 0] = X[i, 0]
@@ -324,8 +343,9 @@ def _move(X, R, Xn, home, start, count, nearby, n_boundary, alpha, P0, tri0, nbr
 
 
 @njit(cache=True, parallel=True)
-def _resize(X, R, Rn, start, count, nearby, n_boundary, X0, R0, skin):
-    """(c) eq. 9 for every interior node, from the nearby bubbles overlapping it.
+def _resize(X, R, Rn, start, count, nearby, inverse, n_boundary, X0, R0, skin):
+    """(c) eq. 9 for every interior node, from the nearby bubbles overlapping it;
+    stores 1 / l of every listed pair in ``inverse`` for the next eq. 8 pass.
     Returns how many resized nodes outgrew the lists built at (X0, R0)."""
     n = X.shape[0]
     expired = 0
@@ -335,7 +355,9 @@ def _resize(X, R, Rn, start, count, nearby, n_boundary, X0, R0, skin):
         for e in range(start[i], start[i] + count[i]):
             j = nearby[e]
             _, _, length = _separation(X, i, j)
-            weight = 1.0 / length if R[j] + R[i] > length and length > 0.0 else 0.0
+            w = 1.0 / length if length > 0.0 else 0.0
+            inverse[e] = w
+            weight = w if R[j] + R[i] > length else 0.0
             num += R[j] * weight
             den += weight
         Rn[i] = num / den if den > 0.0 else R[i]
@@ -382,20 +404,23 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
     bar = _progress_bar(progress, max_iterations)
     lists = _Lists(ring_ptr, ring_idx, n_b, skin)
     expired = True  # no lists yet
+    reuse = False  # 1 / l stored for these lists and positions?
     clock.lap("setup")
     while iterations < max_iterations:
         iterations += 1
         if expired:
             lists.build(X, R)
+            reuse = False
             clock.lap("lists")
-        expired, stuck, largest = _move(X, R, Xn, home, *lists.arrays, n_b, alpha, P0, tri0,
-                                        nbr0, clearance, lists.X0, lists.R0, lists.skin)
+        expired, stuck, largest = _move(X, R, Xn, home, *lists.arrays, reuse, n_b, alpha, P0,
+                                        tri0, nbr0, clearance, lists.X0, lists.R0, lists.skin)
         blocked += stuck
         clock.lap("move")
         if expired:
             lists.build(Xn, R)
             clock.lap("lists")
         expired = _resize(Xn, R, Rn, *lists.arrays, n_b, lists.X0, lists.R0, lists.skin) > 0
+        reuse = True
         clock.lap("resize")
         X, Xn, R, Rn = Xn, X, Rn, R
         if bar is not None:
@@ -444,29 +469,33 @@ class _Lists:
     are they laid out afresh from the new lengths and filled again (the
     counting pass a packed CSR would need every time)."""
 
-    SPARE = 4  # at 1M elements: 3 layouts in 16 builds (2 spare slots: 16 in 16)
+    SPARE = 6  # at 1M elements: 1 layout in 16 builds (4 spare: 3, 2 spare: 16)
 
     def __init__(self, ring_ptr, ring_idx, n_boundary, skin):
         self.ring_ptr, self.ring_idx = ring_ptr, ring_idx
         self.n_boundary, self.skin = n_boundary, float(skin)
         n = len(ring_ptr) - 1
         if np.isinf(self.skin):  # no pruning: the rings themselves
-            self.arrays = (ring_ptr[:-1], np.diff(ring_ptr), ring_idx)
+            self.arrays = (ring_ptr[:-1], np.diff(ring_ptr), ring_idx, np.zeros(len(ring_idx)))
         else:
-            self.arrays = (np.zeros(n, np.int64), np.zeros(n, np.int64), np.empty(0, np.int32))
+            self.arrays = (np.zeros(n, np.int64), np.zeros(n, np.int64), np.empty(0, np.int32),
+                           np.empty(0))
         self.room = np.zeros(n, np.int64)
         self.builds = self.layouts = 0
 
     def build(self, X, R):
         if not np.isinf(self.skin):
-            start, count, out = self.arrays
+            start, count, out, inverse = self.arrays
             args = (X, R, self.ring_ptr, self.ring_idx, self.n_boundary, self.skin)
             if _fill_close(*args, start, self.room, count, out) > 0:
+                self.arrays = None  # the old slots go before the new ones come
+                del out, inverse
                 start, self.room = _layout(count, self.SPARE)
                 out = np.empty(int(start[-1] + self.room[-1]), np.int32)
+                inverse = np.zeros(len(out))
                 _fill_close(*args, start, self.room, count, out)
                 self.layouts += 1
-            self.arrays = (start, count, out)
+            self.arrays = (start, count, out, inverse)
         self.X0, self.R0 = X.copy(), R.copy()
         self.builds += 1
 
