@@ -174,7 +174,7 @@ def boundary_clearance(points, segments, n_boundary, reach):
     clearance = np.zeros(len(points))
     if len(points) > n_boundary:
         horizon = 0.5 * longest + 2.0 * reach
-        nearest, _ = cKDTree(midpoints).query(points[n_boundary:],
+        nearest, _ = cKDTree(midpoints).query(points[n_boundary:], workers=-1,
                                               distance_upper_bound=horizon)
         nearest = np.minimum(nearest, horizon)  # inf: no midpoint within the horizon
         clearance[n_boundary:] = 0.5 * np.maximum(nearest - 0.5 * longest, 0.0)
