@@ -30,6 +30,7 @@ from numba import njit
 
 from .bubbles import boundary_radii, element_radius, triangle_area
 from .errors import MeshingError
+from .memory import prefetch
 from .mesh import Mesh
 from .predicates import orient2d
 from .timing import PhaseClock
@@ -104,6 +105,15 @@ def heap_pop(keys, ids, size):
         first = HEAP_ARITY * i + 1
         if first >= size:
             break
+        # the next level's keys (all 16 grandchildren, at most 3 cache lines)
+        # start loading while this level's comparisons wait for theirs
+        grand = HEAP_ARITY * first + 1
+        if grand < size:
+            last = min(grand + HEAP_ARITY * HEAP_ARITY, size) - 1
+            prefetch(keys, grand)
+            prefetch(keys, (grand + last) // 2)
+            prefetch(keys, last)
+        prefetch(ids, first)  # read on ties and by the move below
         child = first
         for c in range(first + 1, min(first + HEAP_ARITY, size)):
             if _before(keys[c], ids[c], keys[child], ids[child]):
@@ -121,6 +131,22 @@ def heap_pop(keys, ids, size):
 
 
 # --- the §2 kernel -------------------------------------------------------------------
+
+
+@njit(cache=True, inline="always")
+def _prefetch_record(density, t):
+    """Start loading triangle t's record (``density`` is one of its fields)."""
+    if t >= 0:
+        prefetch(density, t)
+
+
+@njit(cache=True, inline="always")
+def _prefetch_around(R, tri, nbr, density, t):
+    """Start loading the records of t's nodes and neighbours, which the
+    cavity search from t reads first."""
+    for k in range(3):
+        prefetch(R, tri[t, k])
+        _prefetch_record(density, nbr[t, k])
 
 
 @njit(cache=True)
@@ -209,6 +235,7 @@ def insertion_loop(
         # (c) the live triangle of smallest density
         t = -1
         while size > 0:
+            _prefetch_record(density, ids[0])  # read by the staleness test below
             size = heap_pop(keys, ids, size)
             cand = ids[size]
             if keys[size] == density[cand]:  # else stale (or UNSPLITTABLE)
@@ -217,6 +244,10 @@ def insertion_loop(
         if t < 0:
             status = ERR_EMPTY_QUEUE
             break
+        # the next triangle is probably the heap's new top: its record loads
+        # during this insertion, and its surroundings after the cavity search
+        nxt = ids[0] if size > 0 else -1
+        _prefetch_record(density, nxt)
         # (d) its centroid, which must be strictly inside it in exact arithmetic
         a = tri[t, 0]
         b = tri[t, 1]
@@ -234,6 +265,8 @@ def insertion_loop(
         state[S_STAMP] += 1
         ncav, nb = find_cavity(P, ex, ey, t, tri, nbr, con, mark, state[S_STAMP], cav, bnd)
         state[S_CAVITY] += ncav
+        if nxt >= 0:
+            _prefetch_around(R, tri, nbr, density, nxt)
         if ntri + nb - ncav > tri.shape[0] or size + nb > keys.shape[0]:
             size = heap_push(keys, ids, size, density[t], t)  # put t back: retried first
             status = NEED_CAPACITY
