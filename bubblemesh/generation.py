@@ -26,7 +26,7 @@ bound raises MeshingError instead of looping.
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from .bubbles import boundary_radii, element_radius, triangle_area
 from .errors import MeshingError
@@ -505,16 +505,16 @@ def _by_lowest_node(triangles, new_of_old):
     return order
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def _permute_mesh(triangles, neighbors, new_of_old, tri_order):
     """Triangle rows in ``tri_order``, node ids and neighbour ids renamed."""
     m = tri_order.shape[0]
     tri_new_of_old = np.empty(m, np.int64)
-    for k in range(m):
+    for k in prange(m):
         tri_new_of_old[tri_order[k]] = k
     tri = np.empty((m, 3), np.int64)
     nbr = np.empty((m, 3), np.int64)
-    for k in range(m):
+    for k in prange(m):
         t = tri_order[k]
         for j in range(3):
             tri[k, j] = new_of_old[triangles[t, j]]
@@ -523,14 +523,28 @@ def _permute_mesh(triangles, neighbors, new_of_old, tri_order):
     return tri, nbr
 
 
-def spatial_renumbering(points, triangles, neighbors, n_fixed):
+@njit(cache=True, parallel=True)
+def _gather_nodes(P, R, old_of_new):
+    """Node positions and radii in the new order (random reads: in parallel)."""
+    n = old_of_new.shape[0]
+    points = np.empty((n, 2))
+    radii = np.empty(n)
+    for k in prange(n):
+        o = old_of_new[k]
+        points[k, 0] = P[o, 0]
+        points[k, 1] = P[o, 1]
+        radii[k] = R[o]
+    return points, radii
+
+
+def spatial_renumbering(points, radii, triangles, neighbors, n_fixed):
     """Renumber nodes after ``n_fixed`` along a Hilbert curve, and triangles by
     their lowest new node.
 
     §2 creates nodes in density order, scattered over the domain; neighbours
     that are far apart in memory make every later pass over the mesh (the §3
     iterations above all) wait on cache misses.  Returns the permuted
-    (points, triangles, neighbors) and the node permutation ``old_of_new``."""
+    (points, radii, triangles, neighbors)."""
     n = len(points)
     old_of_new = np.arange(n)
     old_of_new[n_fixed:] = n_fixed + hilbert_order(points[n_fixed:])
@@ -538,14 +552,16 @@ def spatial_renumbering(points, triangles, neighbors, n_fixed):
     new_of_old[old_of_new] = np.arange(n)
     tri_order = _by_lowest_node(triangles, new_of_old)
     tri, nbr = _permute_mesh(triangles, neighbors, new_of_old, tri_order)
-    return points[old_of_new], tri, nbr, old_of_new
+    points, radii = _gather_nodes(points, radii, old_of_new)
+    return points, radii, tri, nbr
 
 
 def _as_mesh(domain, ws, state, acc, boundary, status, seconds):
     npts, ntri = int(state[S_NPTS]), int(state[S_NTRI])
     n_b = len(boundary)
-    points, triangles, neighbors, order = spatial_renumbering(
-        ws.P[:npts], *(np.ascontiguousarray(a) for a in (ws.tri[:ntri], ws.nbr[:ntri])), n_b
+    points, radii, triangles, neighbors = spatial_renumbering(
+        ws.P[:npts], ws.R[:npts],
+        *(np.ascontiguousarray(a) for a in (ws.tri[:ntri], ws.nbr[:ntri])), n_b
     )
     stats = {
         "insertions": int(state[S_INSERTIONS]),
@@ -559,7 +575,7 @@ def _as_mesh(domain, ws, state, acc, boundary, status, seconds):
         points=points,
         triangles=triangles,
         neighbors=neighbors,
-        radii=ws.R[:npts][order],
+        radii=radii,
         segments=np.asarray(domain.segments, dtype=np.int64),
         n_boundary=n_b,
         domain=domain,

@@ -26,7 +26,7 @@ wrappers turn into ``GeometryError``/``MeshingError``.
 """
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from .errors import GeometryError, MeshingError
 from .predicates import incircle, orient2d, out_of_range, out_of_range_message
@@ -675,7 +675,7 @@ def compact(tri, nbr, keep):
 # --- spatial sort ----------------------------------------------------------------------
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def _hilbert_keys(P, bits):
     n = P.shape[0]
     xmin = P[:, 0].min()
@@ -685,7 +685,7 @@ def _hilbert_keys(P, bits):
         span = 1.0
     side = (1 << bits) - 1
     keys = np.empty(n, np.int64)
-    for k in range(n):
+    for k in prange(n):
         x = int((P[k, 0] - xmin) / span * side)
         y = int((P[k, 1] - ymin) / span * side)
         d = 0
