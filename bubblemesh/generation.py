@@ -484,18 +484,18 @@ def _progress_bar(progress, total):
     return tqdm(total=total, desc="generate (§2)", unit="node")
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def _by_lowest_node(triangles, new_of_old):
     """Triangle order by their lowest renumbered node, ties in id order (a
     counting sort): triangles then follow the nodes' Hilbert order."""
     m = triangles.shape[0]
     lowest = np.empty(m, np.int64)
     first = np.zeros(new_of_old.shape[0] + 1, np.int64)
+    for t in prange(m):
+        lowest[t] = min(new_of_old[triangles[t, 0]], new_of_old[triangles[t, 1]],
+                        new_of_old[triangles[t, 2]])
     for t in range(m):
-        low = min(new_of_old[triangles[t, 0]], new_of_old[triangles[t, 1]],
-                  new_of_old[triangles[t, 2]])
-        lowest[t] = low
-        first[low + 1] += 1
+        first[lowest[t] + 1] += 1
     for v in range(new_of_old.shape[0]):
         first[v + 1] += first[v]
     order = np.empty(m, np.int64)
@@ -560,8 +560,7 @@ def _as_mesh(domain, ws, state, acc, boundary, status, seconds):
     npts, ntri = int(state[S_NPTS]), int(state[S_NTRI])
     n_b = len(boundary)
     points, radii, triangles, neighbors = spatial_renumbering(
-        ws.P[:npts], ws.R[:npts],
-        *(np.ascontiguousarray(a) for a in (ws.tri[:ntri], ws.nbr[:ntri])), n_b
+        ws.P[:npts], ws.R[:npts], ws.tri[:ntri], ws.nbr[:ntri], n_b
     )
     stats = {
         "insertions": int(state[S_INSERTIONS]),
