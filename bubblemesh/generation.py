@@ -506,12 +506,11 @@ def _by_lowest_node(triangles, new_of_old):
 
 
 @njit(cache=True, parallel=True)
-def _permute_mesh(triangles, neighbors, new_of_old, tri_order):
-    """Triangle rows in ``tri_order``, node ids and neighbour ids renamed."""
+def _permute_mesh(triangles, neighbors, new_of_old, tri_order, tri_new_of_old):
+    """Triangle rows in ``tri_order``, node ids and neighbour ids renamed.
+    One parallel loop: numba 0.57 fused a second one (the inverse of
+    ``tri_order``) with it and read the inverse before it was written."""
     m = tri_order.shape[0]
-    tri_new_of_old = np.empty(m, np.int64)
-    for k in prange(m):
-        tri_new_of_old[tri_order[k]] = k
     tri = np.empty((m, 3), np.int64)
     nbr = np.empty((m, 3), np.int64)
     for k in prange(m):
@@ -551,7 +550,9 @@ def spatial_renumbering(points, radii, triangles, neighbors, n_fixed):
     new_of_old = np.empty(n, np.int64)
     new_of_old[old_of_new] = np.arange(n)
     tri_order = _by_lowest_node(triangles, new_of_old)
-    tri, nbr = _permute_mesh(triangles, neighbors, new_of_old, tri_order)
+    tri_new_of_old = np.empty(len(tri_order), np.int64)
+    tri_new_of_old[tri_order] = np.arange(len(tri_order))
+    tri, nbr = _permute_mesh(triangles, neighbors, new_of_old, tri_order, tri_new_of_old)
     points, radii = _gather_nodes(points, radii, old_of_new)
     return points, radii, tri, nbr
 
