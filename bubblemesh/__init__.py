@@ -7,6 +7,7 @@ optimisation of 2D regions with holes (paper §2 and §3), on an exact kernel.
     bm.radius_ratio(mesh.points, mesh.triangles)   # eq. 10
 """
 
+from . import threads  # noqa: F401  (first: configures the thread pool before any kernel runs)
 from .domain import Domain
 from .errors import GeometryError, MeshingError
 from .generation import generate

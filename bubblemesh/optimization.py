@@ -32,7 +32,6 @@ the boundary is inside without a walk (the disc of that radius is).  Updates are
 bits as a serial run.
 """
 
-import os
 
 import numba
 import numpy as np
@@ -45,13 +44,6 @@ from .timing import PhaseClock
 from .triangulation import constrained_delaunay
 
 MAX_HALVINGS = 4
-
-# GNU OpenMP threads spin while they wait; on a busy machine (a CI runner, tox
-# envs side by side) that made 2-thread iterations 2x slower than one thread
-# (measured: 2.27 s vs 1.32 s).  numba's own workqueue layer sleeps instead.
-# A layer the user chose through NUMBA_THREADING_LAYER is respected.
-if "NUMBA_THREADING_LAYER" not in os.environ:
-    numba.config.THREADING_LAYER = "workqueue"  # type: ignore[attr-defined]
 
 
 # --- (a) neighbour sets --------------------------------------------------------------
