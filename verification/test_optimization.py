@@ -107,33 +107,6 @@ def test_verlet_lists_change_no_bit(case):
             assert np.array_equal(getattr(pruned, name), getattr(reference, name)), (
                 f"skin={skin} changed {name}")
 
-def test_thread_count_changes_no_bit():
-    """Both cores are used (the §3 iterations, the 3-ring blocks, §2's
-    renumbering), with the serial run's results: every node reads the
-    previous iterate, so how the loops are cut between threads must not
-    show in any bit."""
-    import numba
-
-    if numba.config.DISABLE_JIT or numba.config.NUMBA_NUM_THREADS < 2:
-        pytest.skip("needs the JIT and at least 2 threads")
-    angle = np.linspace(0.0, 2.0 * np.pi, 200, endpoint=False)
-    dom = bm.Domain.from_loops([np.column_stack([np.cos(angle), np.sin(angle)])])
-    results = {}
-    default = numba.get_num_threads()
-    try:
-        for threads in (1, 2):
-            numba.set_num_threads(threads)
-            mesh = bm.generate(dom)
-            results[threads] = (mesh, bm.optimize(mesh, max_iterations=40))
-    finally:
-        numba.set_num_threads(default)
-    assert len(results[1][0].points) > 2048, "too small to cut the ring blocks"
-    for stage in (0, 1):
-        for name in ("points", "triangles", "neighbors", "radii"):
-            one, two = (getattr(results[t][stage], name) for t in (1, 2))
-            assert np.array_equal(one, two), f"{('generate', 'optimize')[stage]}: {name}"
-
-
 def test_optimize_does_not_mutate_its_input():
     case = S.square_with_hole()
     mesh = bm.generate(bm.Domain.from_loops(list(case.loops)))
