@@ -149,6 +149,16 @@ def _prefetch_around(R, tri, nbr, density, t):
         _prefetch_record(density, nbr[t, k])
 
 
+@njit(cache=True, inline="always")
+def _prefetch_second_ring(R, tri, nbr, density, t):
+    """Then the nodes and neighbours of t's neighbours (their records must
+    have arrived): what the cavity search reads next."""
+    for k in range(3):
+        n = nbr[t, k]
+        if n >= 0:
+            _prefetch_around(R, tri, nbr, density, n)
+
+
 @njit(cache=True)
 def _bubble(P, R, tri, t, r_e):
     """Eq. 3-5 for triangle t: stores r_e and returns D_e."""
@@ -244,10 +254,11 @@ def insertion_loop(
         if t < 0:
             status = ERR_EMPTY_QUEUE
             break
-        # the next triangle is probably the heap's new top: its record loads
-        # during this insertion, and its surroundings after the cavity search
-        nxt = ids[0] if size > 0 else -1
-        _prefetch_record(density, nxt)
+        # The next triangle to split is probably the heap's top: its record,
+        # then its neighbourhood ring by ring load during this insertion
+        # (prefetching; results do not depend on it).
+        if size > 0:
+            _prefetch_record(density, ids[0])
         # (d) its centroid, which must be strictly inside it in exact arithmetic
         a = tri[t, 0]
         b = tri[t, 1]
@@ -265,6 +276,13 @@ def insertion_loop(
         state[S_STAMP] += 1
         ncav, nb = find_cavity(P, ex, ey, t, tri, nbr, con, mark, state[S_STAMP], cav, bnd)
         state[S_CAVITY] += ncav
+        # stale entries on top would be dropped by the next pop anyway: drop
+        # them now, so that the top is a live triangle worth prefetching
+        while size > 0 and keys[0] != density[ids[0]]:
+            size = heap_pop(keys, ids, size)
+            if size > 0:
+                _prefetch_record(density, ids[0])
+        nxt = ids[0] if size > 0 and mark[ids[0]] != state[S_STAMP] else -1  # not doomed
         if nxt >= 0:
             _prefetch_around(R, tri, nbr, density, nxt)
         if ntri + nb - ncav > tri.shape[0] or size + nb > keys.shape[0]:
@@ -283,6 +301,8 @@ def insertion_loop(
             break
         ntri = ntri_new
         npts += 1
+        if nxt >= 0:
+            _prefetch_second_ring(R, tri, nbr, density, nxt)
         for k in range(nb):
             s = newt[k]
             density[s] = _bubble(P, R, tri, s, r_e)
