@@ -528,6 +528,9 @@ def _by_lowest_node(triangles, new_of_old):
     lowest = np.empty(m, np.int64)
     first = np.zeros(new_of_old.shape[0] + 1, np.int64)
     for t in prange(m):
+        if t + 16 < m:  # the random reads of a later iteration start now
+            for j in range(3):
+                prefetch(new_of_old, triangles[t + 16, j])
         lowest[t] = min(new_of_old[triangles[t, 0]], new_of_old[triangles[t, 1]],
                         new_of_old[triangles[t, 2]])
     for t in range(m):
@@ -549,7 +552,19 @@ def _permute_mesh(triangles, neighbors, new_of_old, tri_order, tri_new_of_old):
     m = tri_order.shape[0]
     tri = np.empty((m, 3), np.int64)
     nbr = np.empty((m, 3), np.int64)
+    first_col = triangles[:, 0]
     for k in prange(m):
+        # random reads, started ahead: the record 32 iterations on, then
+        # (its record loaded by now) what the one 16 on will look up
+        if k + 32 < m:
+            prefetch(first_col, tri_order[k + 32])
+        if k + 16 < m:
+            ahead = tri_order[k + 16]
+            for j in range(3):
+                prefetch(new_of_old, triangles[ahead, j])
+                n = neighbors[ahead, j]
+                if n >= 0:
+                    prefetch(tri_new_of_old, n)
         t = tri_order[k]
         for j in range(3):
             tri[k, j] = new_of_old[triangles[t, j]]
