@@ -478,7 +478,7 @@ def generate(domain, *, max_insertions=None, progress=False):
     clock.lap("insertion")
     if status == STOP_MAX_INSERTIONS and (max_insertions is None or limit < max_insertions):
         raise MeshingError(f"generation reached its insertion bound {bound} without eq. 6")
-    mesh = _as_mesh(domain, ws, state, acc, radii, status, 0.0)
+    mesh = _as_mesh(domain, ws, state, acc, radii, status)
     clock.lap("renumbering")
     mesh.stats["seconds"] = clock.total()
     mesh.stats["phases"] = clock.seconds
@@ -608,7 +608,7 @@ def spatial_renumbering(points, radii, triangles, neighbors, n_fixed):
     return points, radii, tri, nbr
 
 
-def _as_mesh(domain, ws, state, acc, boundary, status, seconds):
+def _as_mesh(domain, ws, state, acc, boundary, status):
     npts, ntri = int(state[S_NPTS]), int(state[S_NTRI])
     n_b = len(boundary)
     points, radii, triangles, neighbors = spatial_renumbering(
@@ -620,7 +620,6 @@ def _as_mesh(domain, ws, state, acc, boundary, status, seconds):
         "bubble_area": float(acc[0] + acc[1]),
         "domain_area": float(domain.area),
         "stop": "population" if status == STOP_POPULATION else "max_insertions",
-        "seconds": seconds,
     }
     return Mesh(
         points=points,
