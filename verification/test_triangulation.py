@@ -311,3 +311,16 @@ def test_delaunay_refuses_coordinates_outside_the_exact_range(points):
     return a triangulation decided by underflowed or overflowed products."""
     with pytest.raises(bm.GeometryError, match="point 3"):
         bm.delaunay(np.array(points))
+
+
+@given(st.lists(st.integers(0, 2**32 - 1), max_size=300), st.integers(0, 2**16))
+def test_radix_argsort_is_numpys_stable_argsort(values, spread):
+    """The insertion order's sort (Hilbert keys < 4**16, two 16-bit digits)
+    against numpy's stable argsort; keys folded to few distinct values so
+    that ties (which must keep their input order) are common."""
+    from bubblemesh.triangulation import _radix_argsort
+
+    keys = np.array(values, dtype=np.int64)
+    if spread:
+        keys = keys % (spread + 1) * (2**32 // (spread + 1))
+    assert np.array_equal(_radix_argsort(keys, 2), np.argsort(keys, kind="stable"))
