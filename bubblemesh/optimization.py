@@ -221,7 +221,9 @@ def _outgrew(X, R, X0, R0, i, skin):
     """Has node i used up its share of the skin since the lists were built?"""
     dx = X[i, 0] - X0[i, 0]
     dy = X[i, 1] - X0[i, 1]
-    return np.sqrt(dx * dx + dy * dy) + max(0.0, R[i] - R0[i]) > 0.9 * skin * R0[i]
+    # |dx, dy| + growth > share, without the square root
+    room = 0.9 * skin * R0[i] - max(0.0, R[i] - R0[i])
+    return room < 0.0 or dx * dx + dy * dy > room * room
 
 
 # --- keeping nodes inside: a walk in the §2 mesh ----------------------------------------
@@ -328,10 +330,10 @@ def _move(X, R, Xn, home, start, count, nearby, inverse, reuse, n_boundary, alph
             step *= 0.5
         dx = Xn[i, 0] - X[i, 0]
         dy = Xn[i, 1] - X[i, 1]
-        largest = max(largest, np.sqrt(dx * dx + dy * dy) / R[i])
+        largest = max(largest, (dx * dx + dy * dy) / (R[i] * R[i]))
         if _outgrew(Xn, R, X0, R0, i, skin):
             expired += 1
-    return expired, blocked, largest
+    return expired, blocked, np.sqrt(largest)
 
 
 @njit(cache=True, parallel=True)
