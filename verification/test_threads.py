@@ -1,8 +1,10 @@
-"""The parallel kernels: same bits on any number of threads, and safe to fork.
+"""The parallel kernels: same bits on any number of threads and in any
+threading layer, and safe to fork.
 
 - generate (its parallel renumbering) and optimize (the §3 iterations, the
   3-ring blocks) give the same bits with 1 and 2 threads ("results identical
-  to the serial run", issue 6);
+  to the serial run", issue 6), and with tbb (the ``fast`` extra) as with
+  numba's workqueue;
 - after a mesh in the parent, a forked multiprocessing pool still meshes
   (GNU OpenMP, numba's omp layer, kills such children and the pool waits
   forever: the test has a timeout instead).
@@ -11,6 +13,8 @@
 from __future__ import annotations
 
 import multiprocessing
+import os
+import subprocess
 import sys
 
 import numpy as np
@@ -24,6 +28,22 @@ def _disk(n):
     return bm.Domain.from_loops([np.column_stack([np.cos(angle), np.sin(angle)])])
 
 
+def _meshes():
+    """The generated and the optimised mesh of a disk big enough (> 2048
+    nodes) to cut the 3-ring blocks, as named arrays."""
+    mesh = bm.generate(_disk(200))
+    assert len(mesh.points) > 2048, "too small to cut the ring blocks"
+    optimized = bm.optimize(mesh, max_iterations=40)
+    return {f"{stage}_{name}": getattr(m, name)
+            for stage, m in (("generate", mesh), ("optimize", optimized))
+            for name in ("points", "triangles", "neighbors", "radii")}
+
+
+def _assert_same_bits(one, two):
+    for key in one:
+        assert np.array_equal(one[key], two[key]), key
+
+
 def test_thread_count_changes_no_bit():
     """Every node reads the previous iterate, so how the loops are cut
     between threads must not show in any bit."""
@@ -31,21 +51,35 @@ def test_thread_count_changes_no_bit():
 
     if numba.config.DISABLE_JIT or numba.config.NUMBA_NUM_THREADS < 2:
         pytest.skip("needs the JIT and at least 2 threads")
-    dom = _disk(200)
     results = {}
     default = numba.get_num_threads()
     try:
         for threads in (1, 2):
             numba.set_num_threads(threads)
-            mesh = bm.generate(dom)
-            results[threads] = (mesh, bm.optimize(mesh, max_iterations=40))
+            results[threads] = _meshes()
     finally:
         numba.set_num_threads(default)
-    assert len(results[1][0].points) > 2048, "too small to cut the ring blocks"
-    for stage in (0, 1):
-        for name in ("points", "triangles", "neighbors", "radii"):
-            one, two = (getattr(results[t][stage], name) for t in (1, 2))
-            assert np.array_equal(one, two), f"{('generate', 'optimize')[stage]}: {name}"
+    _assert_same_bits(results[1], results[2])
+
+
+def test_threading_layer_changes_no_bit(tmp_path):
+    """The layer bubblemesh picked here (tbb, with the fast extra) against
+    numba's workqueue in a child process: the same bits."""
+    import numba
+
+    if numba.config.DISABLE_JIT:
+        pytest.skip("needs the JIT")
+    here = _meshes()
+    if numba.threading_layer() == "workqueue":
+        pytest.skip("this environment runs workqueue itself (no tbb): nothing to compare")
+    out = tmp_path / "workqueue.npz"
+    code = (f"import sys; sys.path.insert(0, {os.path.dirname(__file__)!r}); "
+            "import numba, numpy as np, test_threads as t; m = t._meshes(); "
+            f"assert numba.threading_layer() == 'workqueue'; np.savez({str(out)!r}, **m)")
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=600,
+                   env=dict(os.environ, NUMBA_THREADING_LAYER="workqueue"))
+    with np.load(out) as child:
+        _assert_same_bits(here, child)
 
 
 def _triangle_count(n):
