@@ -275,6 +275,14 @@ def _inverse_separation(X, i, j):
     return dx, dy, 1.0 / length if length > 0.0 else 0.0
 
 
+@njit(cache=True, inline="always")
+def _unsigned(k):
+    """Index k as unsigned: numba then skips the negative-index wrap-around
+    it adds to every signed index (three instructions per array access; 10-25%
+    of the eq. 7-9 loops, measured).  Only for indices known to be >= 0."""
+    return np.uint64(k)
+
+
 @njit(cache=True, parallel=True)
 def _move(X, R, Xn, home, start, count, nearby, inverse, reuse, n_boundary, alpha, P0, tri0,
           nbr0, clearance, X0, R0, skin):
@@ -293,11 +301,13 @@ def _move(X, R, Xn, home, start, count, nearby, inverse, reuse, n_boundary, alph
     expired = 0
     blocked = 0
     largest = 0.0
-    for i in prange(n_boundary, X.shape[0]):
+    for node in prange(n_boundary, X.shape[0]):
+        i = _unsigned(node)
         fx = 0.0
         fy = 0.0
-        for e in range(start[i], start[i] + count[i]):
-            j = nearby[e]
+        first = _unsigned(start[i])
+        for e in range(first, first + _unsigned(count[i])):
+            j = _unsigned(nearby[e])
             if reuse:
                 dx = X[i, 0] - X[j, 0]
                 dy = X[i, 1] - X[j, 1]
@@ -343,11 +353,13 @@ def _resize(X, R, Rn, start, count, nearby, inverse, n_boundary, X0, R0, skin):
     Returns how many resized nodes outgrew the lists built at (X0, R0)."""
     n = X.shape[0]
     expired = 0
-    for i in prange(n_boundary, n):
+    for node in prange(n_boundary, n):
+        i = _unsigned(node)
         num = 0.0
         den = 0.0
-        for e in range(start[i], start[i] + count[i]):
-            j = nearby[e]
+        first = _unsigned(start[i])
+        for e in range(first, first + _unsigned(count[i])):
+            j = _unsigned(nearby[e])
             _, _, length = _separation(X, i, j)
             w = 1.0 / length if length > 0.0 else 0.0
             inverse[e] = w
