@@ -49,6 +49,14 @@ MAX_HALVINGS = 4
 # --- (a) neighbour sets --------------------------------------------------------------
 
 
+@njit(cache=True, inline="always")
+def _unsigned(k):
+    """Index k as unsigned: numba then skips the negative-index wrap-around
+    it adds to every signed index (three instructions per array access; 10-25%
+    of the eq. 7-9 loops, measured).  Only for indices known to be >= 0."""
+    return np.uint64(k)
+
+
 @njit(cache=True)
 def node_adjacency(triangles, neighbors, n):
     """CSR (ptr, idx) of the mesh's edge graph: each edge once per direction."""
@@ -193,13 +201,14 @@ def _fill_close(X, R, ring_ptr, ring_idx, n_boundary, skin, start, room, count, 
     order, goes to out[start[i]:] if it fits in room[i] slots; count[i] is its
     length either way.  Returns how many lists did not fit."""
     overflow = 0
-    for i in prange(n_boundary, X.shape[0]):
+    for node in prange(n_boundary, X.shape[0]):
+        i = _unsigned(node)
         c = 0
-        for e in range(ring_ptr[i], ring_ptr[i + 1]):
-            j = ring_idx[e]
+        for e in range(_unsigned(ring_ptr[i]), _unsigned(ring_ptr[node + 1])):
+            j = _unsigned(ring_idx[e])
             if _closer_than(X, i, j, (1.0 + skin) * (R[i] + R[j])):
                 if c < room[i]:
-                    out[start[i] + c] = j
+                    out[_unsigned(start[i] + c)] = j
                 c += 1
         count[i] = c
         if c > room[i]:
@@ -273,14 +282,6 @@ def _inverse_separation(X, i, j):
     """(dx, dy, 1 / l_ij) from node j to node i; 0 for coincident nodes."""
     dx, dy, length = _separation(X, i, j)
     return dx, dy, 1.0 / length if length > 0.0 else 0.0
-
-
-@njit(cache=True, inline="always")
-def _unsigned(k):
-    """Index k as unsigned: numba then skips the negative-index wrap-around
-    it adds to every signed index (three instructions per array access; 10-25%
-    of the eq. 7-9 loops, measured).  Only for indices known to be >= 0."""
-    return np.uint64(k)
 
 
 @njit(cache=True, parallel=True)
