@@ -30,7 +30,7 @@ from numba import njit, prange
 
 from .bubbles import boundary_radii, element_radius, triangle_area
 from .errors import MeshingError
-from .memory import prefetch
+from .memory import prefetch, unsigned
 from .mesh import Mesh
 from .predicates import orient2d
 from .timing import PhaseClock
@@ -81,14 +81,23 @@ def heap_push(keys, ids, size, key, ident):
     i = size
     while i > 0:
         parent = (i - 1) // HEAP_ARITY
-        if not _before(key, ident, keys[parent], ids[parent]):
+        p = unsigned(parent)
+        if not _before(key, ident, keys[p], ids[p]):
             break
-        keys[i] = keys[parent]
-        ids[i] = ids[parent]
+        keys[unsigned(i)] = keys[p]
+        ids[unsigned(i)] = ids[p]
         i = parent
     keys[i] = key
     ids[i] = ident
     return size + 1
+
+
+@njit(cache=True, inline="always")
+def _entry_before(keys, ids, a, b):
+    """Does heap entry a come before entry b?"""
+    ua = unsigned(a)
+    ub = unsigned(b)
+    return _before(keys[ua], ids[ua], keys[ub], ids[ub])
 
 
 @njit(cache=True)
@@ -116,12 +125,13 @@ def heap_pop(keys, ids, size):
         prefetch(ids, first)  # read on ties and by the move below
         child = first
         for c in range(first + 1, min(first + HEAP_ARITY, size)):
-            if _before(keys[c], ids[c], keys[child], ids[child]):
+            if _entry_before(keys, ids, c, child):
                 child = c
-        if not _before(keys[child], ids[child], key, ident):
+        u = unsigned(child)
+        if not _before(keys[u], ids[u], key, ident):
             break
-        keys[i] = keys[child]
-        ids[i] = ids[child]
+        keys[unsigned(i)] = keys[u]
+        ids[unsigned(i)] = ids[u]
         i = child
     keys[i] = key
     ids[i] = ident
@@ -176,9 +186,9 @@ def _prefetch_third_ring_nodes(R, tri, nbr, t):
 @njit(cache=True)
 def _bubble(P, R, tri, t, r_e):
     """Eq. 3-5 for triangle t: stores r_e and returns D_e."""
-    a = tri[t, 0]
-    b = tri[t, 1]
-    c = tri[t, 2]
+    a = unsigned(tri[t, 0])
+    b = unsigned(tri[t, 1])
+    c = unsigned(tri[t, 2])
     r, _, _ = element_radius(
         P[a, 0], P[a, 1], R[a], P[b, 0], P[b, 1], R[b], P[c, 0], P[c, 1], R[c]
     )
@@ -274,9 +284,9 @@ def insertion_loop(
         if size > 0:
             _prefetch_record(density, ids[0])
         # (d) its centroid, which must be strictly inside it in exact arithmetic
-        a = tri[t, 0]
-        b = tri[t, 1]
-        c = tri[t, 2]
+        a = unsigned(tri[t, 0])
+        b = unsigned(tri[t, 1])
+        c = unsigned(tri[t, 2])
         ex = (P[a, 0] + P[b, 0] + P[c, 0]) / 3.0
         ey = (P[a, 1] + P[b, 1] + P[c, 1]) / 3.0
         if (

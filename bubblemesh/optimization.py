@@ -38,6 +38,7 @@ import numpy as np
 from numba import njit, prange
 
 from .errors import GeometryError, MeshingError
+from .memory import unsigned
 from .mesh import Mesh
 from .predicates import orient2d
 from .timing import PhaseClock
@@ -47,14 +48,6 @@ MAX_HALVINGS = 4
 
 
 # --- (a) neighbour sets --------------------------------------------------------------
-
-
-@njit(cache=True, inline="always")
-def _unsigned(k):
-    """Index k as unsigned: numba then skips the negative-index wrap-around
-    it adds to every signed index (three instructions per array access; 10-25%
-    of the eq. 7-9 loops, measured).  Only for indices known to be >= 0."""
-    return np.uint64(k)
 
 
 @njit(cache=True)
@@ -202,13 +195,13 @@ def _fill_close(X, R, ring_ptr, ring_idx, n_boundary, skin, start, room, count, 
     length either way.  Returns how many lists did not fit."""
     overflow = 0
     for node in prange(n_boundary, X.shape[0]):
-        i = _unsigned(node)
+        i = unsigned(node)
         c = 0
-        for e in range(_unsigned(ring_ptr[i]), _unsigned(ring_ptr[node + 1])):
-            j = _unsigned(ring_idx[e])
+        for e in range(unsigned(ring_ptr[i]), unsigned(ring_ptr[node + 1])):
+            j = unsigned(ring_idx[e])
             if _closer_than(X, i, j, (1.0 + skin) * (R[i] + R[j])):
                 if c < room[i]:
-                    out[_unsigned(start[i] + c)] = j
+                    out[unsigned(start[i] + c)] = j
                 c += 1
         count[i] = c
         if c > room[i]:
@@ -303,12 +296,12 @@ def _move(X, R, Xn, home, start, count, nearby, inverse, reuse, n_boundary, alph
     blocked = 0
     largest = 0.0
     for node in prange(n_boundary, X.shape[0]):
-        i = _unsigned(node)
+        i = unsigned(node)
         fx = 0.0
         fy = 0.0
-        first = _unsigned(start[i])
-        for e in range(first, first + _unsigned(count[i])):
-            j = _unsigned(nearby[e])
+        first = unsigned(start[i])
+        for e in range(first, first + unsigned(count[i])):
+            j = unsigned(nearby[e])
             if reuse:
                 dx = X[i, 0] - X[j, 0]
                 dy = X[i, 1] - X[j, 1]
@@ -355,12 +348,12 @@ def _resize(X, R, Rn, start, count, nearby, inverse, n_boundary, X0, R0, skin):
     n = X.shape[0]
     expired = 0
     for node in prange(n_boundary, n):
-        i = _unsigned(node)
+        i = unsigned(node)
         num = 0.0
         den = 0.0
-        first = _unsigned(start[i])
-        for e in range(first, first + _unsigned(count[i])):
-            j = _unsigned(nearby[e])
+        first = unsigned(start[i])
+        for e in range(first, first + unsigned(count[i])):
+            j = unsigned(nearby[e])
             _, _, length = _separation(X, i, j)
             w = 1.0 / length if length > 0.0 else 0.0
             inverse[e] = w

@@ -29,6 +29,7 @@ import numpy as np
 from numba import njit, prange
 
 from .errors import GeometryError, MeshingError
+from .memory import unsigned
 from .predicates import incircle, orient2d, out_of_range, out_of_range_message
 
 GHOST = -1
@@ -89,10 +90,11 @@ def in_conflict(P, tri, t, px, py):
     """Does (px, py) lie strictly inside the circumcircle of triangle t?  For a
     ghost triangle the 'circle' is the open outer half-plane of its hull edge
     plus the open edge itself."""
-    a = tri[t, 0]
-    b = tri[t, 1]
-    c = tri[t, 2]
+    a = tri[unsigned(t), 0]
+    b = tri[unsigned(t), 1]
+    c = tri[unsigned(t), 2]
     if a >= 0 and b >= 0 and c >= 0:
+        a, b, c = unsigned(a), unsigned(b), unsigned(c)
         return (
             incircle(P[a, 0], P[a, 1], P[b, 0], P[b, 1], P[c, 0], P[c, 1], px, py) > 0.0
         )
@@ -121,8 +123,8 @@ def locate(P, px, py, start, tri, nbr, max_steps):
             return t
         moved = False
         for j in range(3):
-            u = tri[t, (j + 1) % 3]
-            v = tri[t, (j + 2) % 3]
+            u = unsigned(tri[t, (j + 1) % 3])  # t is not a ghost
+            v = unsigned(tri[t, (j + 2) % 3])
             if _orient_pt(P, u, v, px, py) < 0.0:
                 t = nbr[t, j]
                 moved = True
@@ -149,20 +151,20 @@ def find_cavity(P, px, py, t0, tri, nbr, con, mark, stamp, cav, bnd):
     nb = 0
     i = 0
     while i < ncav:
-        t = cav[i]
+        t = unsigned(cav[i])
         i += 1
         for j in range(3):
             n = nbr[t, j]
             if n >= 0 and con[t, j] == 0:
-                if mark[n] == stamp:
+                if mark[unsigned(n)] == stamp:
                     continue
-                if mark[n] != -stamp:
+                if mark[unsigned(n)] != -stamp:
                     if in_conflict(P, tri, n, px, py):
-                        mark[n] = stamp
+                        mark[unsigned(n)] = stamp
                         cav[ncav] = n
                         ncav += 1
                         continue
-                    mark[n] = -stamp
+                    mark[unsigned(n)] = -stamp
             # a constrained edge with cavity on both sides is recorded twice, so
             # the count check of fill_cavity rejects it instead of deleting it
             bnd[nb, 0] = tri[t, (j + 1) % 3]
@@ -188,7 +190,7 @@ def fill_cavity(P, pi, tri, nbr, con, vt, ntri, cav, ncav, bnd, nb, vstart, newt
     for k in range(nb):
         u = bnd[k, 0]
         v = bnd[k, 1]
-        if u >= 0 and v >= 0 and _orient_pt(P, u, v, px, py) <= 0.0:
+        if u >= 0 and v >= 0 and _orient_pt(P, unsigned(u), unsigned(v), px, py) <= 0.0:
             return ERR_NOT_STAR, ntri
     simple = True
     for k in range(nb):
@@ -210,27 +212,29 @@ def fill_cavity(P, pi, tri, nbr, con, vt, ntri, cav, ncav, bnd, nb, vstart, newt
         newt[k] = cav[k] if k < ncav else ntri + (k - ncav)
     for k in range(nb):
         t = newt[k]
+        ut = unsigned(t)
         u = bnd[k, 0]
         v = bnd[k, 1]
         n = bnd[k, 2]
-        tri[t, 0] = u
-        tri[t, 1] = v
-        tri[t, 2] = pi
-        nbr[t, 2] = n
-        con[t, 0] = 0
-        con[t, 1] = 0
-        con[t, 2] = bnd[k, 3]
+        tri[ut, 0] = u
+        tri[ut, 1] = v
+        tri[ut, 2] = pi
+        nbr[ut, 2] = n
+        con[ut, 0] = 0
+        con[ut, 1] = 0
+        con[ut, 2] = bnd[k, 3]
         if n >= 0:
+            un = unsigned(n)
             for m in range(3):
-                if tri[n, (m + 1) % 3] == v and tri[n, (m + 2) % 3] == u:
-                    nbr[n, m] = t
+                if tri[un, (m + 1) % 3] == v and tri[un, (m + 2) % 3] == u:
+                    nbr[un, m] = t
                     break
     for k in range(nb):
         t = newt[k]
-        v = tri[t, 1]
+        v = tri[unsigned(t), 1]
         s = newt[vstart[v if v >= 0 else nv]]
-        nbr[t, 0] = s
-        nbr[s, 1] = t
+        nbr[unsigned(t), 0] = s
+        nbr[unsigned(s), 1] = t
     for k in range(nb):
         u = bnd[k, 0]
         vstart[u if u >= 0 else nv] = -1
