@@ -41,10 +41,12 @@ from .errors import GeometryError, MeshingError
 from .memory import unsigned
 from .mesh import Mesh
 from .predicates import orient2d
+from .simd import roots_and_reciprocals
 from .timing import PhaseClock
 from .triangulation import constrained_delaunay
 
 MAX_HALVINGS = 4
+_ONE, _TWO = np.uint64(1), np.uint64(2)  # steps of unsigned list positions
 
 
 # --- (a) neighbour sets --------------------------------------------------------------
@@ -263,10 +265,15 @@ def walk_inside(P0, tri0, nbr0, start, px, py, max_steps):
 
 
 @njit(cache=True, inline="always")
+def _difference(X, i, j):
+    """(dx, dy): the vector from node j to node i."""
+    return X[i, 0] - X[j, 0], X[i, 1] - X[j, 1]
+
+
+@njit(cache=True, inline="always")
 def _separation(X, i, j):
     """(dx, dy, l_ij): the vector from node j to node i and its length."""
-    dx = X[i, 0] - X[j, 0]
-    dy = X[i, 1] - X[j, 1]
+    dx, dy = _difference(X, i, j)
     return dx, dy, np.sqrt(dx * dx + dy * dy)
 
 
@@ -303,8 +310,7 @@ def _move(X, R, Xn, home, start, count, nearby, inverse, reuse, n_boundary, alph
         for e in range(first, first + unsigned(count[i])):
             j = unsigned(nearby[e])
             if reuse:
-                dx = X[i, 0] - X[j, 0]
-                dy = X[i, 1] - X[j, 1]
+                dx, dy = _difference(X, i, j)
                 w = inverse[e]
             else:
                 dx, dy, w = _inverse_separation(X, i, j)
@@ -340,10 +346,23 @@ def _move(X, R, Xn, home, start, count, nearby, inverse, reuse, n_boundary, alph
     return expired, blocked, np.sqrt(largest)
 
 
+@njit(cache=True, inline="always")
+def _weigh(R, i, j, length, w, inverse, e, num, den):
+    """One term of eq. 9 for list entry e (node j): stores 1 / l (``w``; 0 for
+    coincident nodes) for the next eq. 8 pass, and adds r_j / l and 1 / l to
+    the sums if the bubbles overlap.  Returns the sums."""
+    w = w if length > 0.0 else 0.0
+    inverse[e] = w
+    weight = w if R[j] + R[i] > length else 0.0
+    return num + R[j] * weight, den + weight
+
+
 @njit(cache=True, parallel=True)
 def _resize(X, R, Rn, start, count, nearby, inverse, n_boundary, X0, R0, skin):
     """(c) eq. 9 for every interior node, from the nearby bubbles overlapping it;
     stores 1 / l of every listed pair in ``inverse`` for the next eq. 8 pass.
+    The lengths and their reciprocals go two list entries at a time (packed,
+    the same bits; ``simd.py``), the sums stay in list order.
     Returns how many resized nodes outgrew the lists built at (X0, R0)."""
     n = X.shape[0]
     expired = 0
@@ -351,15 +370,22 @@ def _resize(X, R, Rn, start, count, nearby, inverse, n_boundary, X0, R0, skin):
         i = unsigned(node)
         num = 0.0
         den = 0.0
-        first = unsigned(start[i])
-        for e in range(first, first + unsigned(count[i])):
+        e = unsigned(start[i])
+        end = e + unsigned(count[i])
+        while e + _ONE < end:
+            j = unsigned(nearby[e])
+            k = unsigned(nearby[e + _ONE])
+            dx, dy = _difference(X, i, j)
+            ex, ey = _difference(X, i, k)
+            l_j, l_k, w_j, w_k = roots_and_reciprocals(dx * dx + dy * dy, ex * ex + ey * ey)
+            num, den = _weigh(R, i, j, l_j, w_j, inverse, e, num, den)
+            num, den = _weigh(R, i, k, l_k, w_k, inverse, e + _ONE, num, den)
+            e += _TWO
+        if e < end:
             j = unsigned(nearby[e])
             _, _, length = _separation(X, i, j)
             w = 1.0 / length if length > 0.0 else 0.0
-            inverse[e] = w
-            weight = w if R[j] + R[i] > length else 0.0
-            num += R[j] * weight
-            den += weight
+            num, den = _weigh(R, i, j, length, w, inverse, e, num, den)
         Rn[i] = num / den if den > 0.0 else R[i]
         if _outgrew(X, Rn, X0, R0, i, skin):
             expired += 1
