@@ -37,9 +37,9 @@ import numba
 import numpy as np
 from numba import njit, prange
 
+from ._mesh import Mesh, OptimizationStats
 from .errors import GeometryError, MeshingError
 from .memory import unsigned
-from .mesh import Mesh
 from .predicates import orient2d
 from .simd import roots_and_reciprocals
 from .timing import PhaseClock
@@ -461,13 +461,13 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
     del lists, ring_ptr, ring_idx, Xn, Rn, home, clearance
     triangles, neighbors = _retriangulate(X, mesh.segments)
     clock.lap("retriangulation")
-    stats = dict(mesh.stats)
-    stats.update(iterations=iterations, max_displacement=largest, blocked_moves=blocked,
-                 optimize_seconds=clock.total(), optimize_phases=clock.seconds,
-                 amplification=amplification, rings=rings, alpha=alpha, list_builds=builds,
-                 list_layouts=layouts)
+    stats = OptimizationStats(
+        iterations=iterations, max_displacement=float(largest), blocked_moves=int(blocked),
+        list_builds=builds, list_layouts=layouts, amplification=amplification, rings=rings,
+        alpha=alpha, seconds=clock.total(), phases=dict(clock.seconds))
     return Mesh(points=X, triangles=triangles, neighbors=neighbors, radii=R,
-                segments=mesh.segments, n_boundary=n_b, domain=mesh.domain, stats=stats)
+                segments=mesh.segments, n_boundary=n_b, domain=mesh.domain,
+                generation=mesh.generation, optimization=stats)
 
 
 def _check_parameters(*, amplification, alpha, skin, rings, max_iterations, tol):

@@ -318,7 +318,7 @@ def test_radix_argsort_is_numpys_stable_argsort(values, spread):
     """The insertion order's sort (Hilbert keys < 4**16, two 16-bit digits)
     against numpy's stable argsort; keys folded to few distinct values so
     that ties (which must keep their input order) are common."""
-    from bubblemesh.triangulation import _radix_argsort
+    from bubblemesh._ordering import _radix_argsort
 
     keys = np.array(values, dtype=np.int64)
     if spread:

@@ -1,0 +1,97 @@
+"""The Mesh object: identity equality, per-stage records, meshio round trips,
+and meshes from outside (files of other meshers) checked and oriented.
+
+Oracles: a written-and-read bubblemesh mesh must give back the same arrays
+bit for bit; a foreign mesh (scipy's Qhull Delaunay, written clockwise) must
+come back valid by ``oracles.check_valid`` with the same triangle set and
+its boundary edges exactly ``oracles.boundary_edges``."""
+
+from __future__ import annotations
+
+import numpy as np
+import oracles as O
+import pytest
+import strategies as S
+
+import bubblemesh as bm
+
+
+@pytest.fixture(scope="module")
+def optimised():
+    return bm.mesh(bm.Domain.from_loops(list(S.square_with_hole().loops)))
+
+
+def test_equality_is_identity(optimised):
+    other = bm.optimize(bm.generate(optimised.domain))
+    assert optimised == optimised
+    assert (optimised == other) is False
+    assert len({optimised: 1, other: 2}) == 2
+
+
+def test_stage_records_are_set_at_construction(optimised):
+    gen, opt = optimised.generation, optimised.optimization
+    assert isinstance(gen, bm.GenerationStats) and isinstance(opt, bm.OptimizationStats)
+    assert gen.stop == "population" and gen.insertions == len(optimised.points) - \
+        optimised.n_boundary
+    assert 1 <= opt.iterations <= 200 and opt.amplification == 1.7
+    assert optimised.stats["iterations"] == opt.iterations
+    assert optimised.stats["insertions"] == gen.insertions
+    with pytest.raises(TypeError):
+        optimised.stats["iterations"] = 0  # a read-only view
+
+
+@pytest.mark.parametrize("suffix", [".vtu", ".msh", ".xdmf"])
+def test_read_round_trips_a_written_mesh(optimised, tmp_path, suffix):
+    path = tmp_path / f"m{suffix}"
+    optimised.write(path, point_data={"id": np.arange(len(optimised.points))})
+    back = bm.read(path)
+    assert np.array_equal(back.points, optimised.points)
+    assert np.array_equal(back.triangles, optimised.triangles)
+    assert np.array_equal(back.neighbors, optimised.neighbors)
+    assert np.array_equal(back.radii, optimised.radii)
+    assert back.n_boundary == optimised.n_boundary
+    assert set(map(tuple, back.segments.tolist())) == set(map(tuple, optimised.segments.tolist()))
+
+
+def test_to_meshio_carries_the_given_data(optimised):
+    m = optimised.to_meshio(cell_data={"area": np.ones(len(optimised.triangles))})
+    assert np.array_equal(m.points[:, :2], optimised.points) and not m.points[:, 2].any()
+    assert np.array_equal(m.cells_dict["triangle"], optimised.triangles)
+    assert np.array_equal(m.cell_data["radius_ratio"][0], optimised.quality())
+    with pytest.raises(ValueError, match="expected"):
+        optimised.to_meshio(cell_data={"short": np.ones(3)})
+
+
+def test_a_foreign_mesh_is_oriented_and_boundary_first(tmp_path):
+    spatial = pytest.importorskip("scipy.spatial")
+    rng = np.random.default_rng(7)
+    pts = rng.random((60, 2))
+    clockwise = spatial.Delaunay(pts).simplices[:, ::-1].copy()
+    import meshio
+
+    meshio.write(tmp_path / "q.vtu", meshio.Mesh(pts, [("triangle", clockwise)]))
+    back = bm.read(tmp_path / "q.vtu")
+    O.check_valid(back.points, back.triangles, back.neighbors)
+    # the same triangles, renumbered: map each back to the original node ids
+    old_of_new = np.array([np.flatnonzero((pts == p).all(axis=1))[0] for p in back.points])
+    assert O.canonical_triangles(old_of_new[back.triangles]) == \
+        O.canonical_triangles(clockwise[:, ::-1])
+    boundary = {v for e in O.boundary_edges(back.triangles) for v in e}
+    assert boundary == set(range(back.n_boundary)), "boundary nodes are not first"
+    assert set(map(tuple, back.segments.tolist())) == O.boundary_edges(back.triangles)
+
+
+@pytest.mark.parametrize("triangles, words", [
+    (np.array([[0, 1, 6]]), "out of range"),
+    (np.array([[0, 1, 2], [0, 1, 5]]), "same way"),  # overlapping
+    (np.array([[0, 1, 2], [1, 0, 3], [0, 1, 3]]), "more than two"),
+    (np.array([[0, 1, 4]]), "zero area"),
+    (np.array([[0.0, 1.0, 2.0]]), "integers"),
+])
+def test_inconsistent_triangles_are_refused(triangles, words):
+    from bubblemesh._mesh import from_arrays
+
+    pts = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.2, -1.0], [2.0, 0.0],
+                    [1.0, 1.0]])
+    with pytest.raises(bm.GeometryError, match=words):
+        from_arrays(pts, triangles)
