@@ -11,7 +11,7 @@ in the 2.2 format, XDMF, ...), imported lazily since it is needed only here.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -177,6 +177,7 @@ def write_mesh(
     point_data: dict[str, np.ndarray] | None = None,
     cell_data: dict[str, np.ndarray] | None = None,
     file_format: str | None = None,
+    **meshio_kwargs: Any,
 ) -> None:
     """Write a triangle mesh with meshio; the format follows the file suffix.
 
@@ -184,7 +185,8 @@ def write_mesh(
     XDMF with its data inline as XML (one file, no ``.h5`` beside it); pass
     ``file_format`` (a meshio format name) to choose otherwise.  Points are
     padded to 3-D with z = 0 (VTU and Gmsh store 3-D points).
-    ``cell_data`` maps a name to one value per triangle.
+    ``cell_data`` maps a name to one value per triangle; ``meshio_kwargs`` go
+    to ``meshio.write`` (e.g. ``binary=False`` for Gmsh).
     """
     try:
         import meshio
@@ -208,4 +210,4 @@ def write_mesh(
     )
     # (Gmsh stays binary: meshio's ASCII writer prints numpy 2 scalars as "np.float64(...)")
     options = {"data_format": "XML"} if file_format == "xdmf" else {}
-    meshio.write(path, mesh, file_format=file_format, **options)
+    meshio.write(path, mesh, file_format=file_format, **{**options, **meshio_kwargs})

@@ -95,3 +95,10 @@ def test_inconsistent_triangles_are_refused(triangles, words):
                     [1.0, 1.0]])
     with pytest.raises(bm.GeometryError, match=words):
         from_arrays(pts, triangles)
+
+
+def test_write_passes_meshio_options(optimised, tmp_path):
+    path = tmp_path / "ascii.vtu"
+    optimised.write(path, binary=False)
+    assert b"<DataArray" in path.read_bytes() and b'format="ascii"' in path.read_bytes()
+    assert np.array_equal(bm.read(path).triangles, optimised.triangles)
