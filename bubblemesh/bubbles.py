@@ -36,7 +36,7 @@ def element_radius(ax, ay, ra, bx, by, rb, cx, cy, rc):
     Returns (r_e, centroid x, centroid y)."""
     ex = (ax + bx + cx) / 3.0
     ey = (ay + by + cy) / 3.0
-    wa = 1.0 / math.sqrt((ax - ex) ** 2 + (ay - ey) ** 2)  # sqrt: hypot is ~5x slower here
+    wa = 1.0 / math.sqrt((ax - ex) ** 2 + (ay - ey) ** 2)  # sqrt: hypot is far slower here
     wb = 1.0 / math.sqrt((bx - ex) ** 2 + (by - ey) ** 2)
     wc = 1.0 / math.sqrt((cx - ex) ** 2 + (cy - ey) ** 2)
     return (ra * wa + rb * wb + rc * wc) / (wa + wb + wc), ex, ey

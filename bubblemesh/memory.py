@@ -9,9 +9,9 @@ to any result; without the JIT it does nothing.
 
 :func:`unsigned` makes an index unsigned.  numba wraps every signed index
 around (a negative one counts from the end): a shift, an and and an add per
-array access, which cost 10-30% of the §3 loops (eq. 7-9) and the §2 cavity
-search.  An unsigned index has no negative values to wrap.  Only for indices
-known to be >= 0 (a -1 "none" would become a huge index).
+array access in the §3 loops (eq. 7-9) and the §2 cavity search.  An
+unsigned index has no negative values to wrap.  Only for indices known to be
+>= 0 (a -1 "none" would become a huge index).
 """
 
 import numba

@@ -1,5 +1,5 @@
 """Wall-clock seconds per phase of a run, reported in ``Mesh.stats`` so that a
-user (and the benchmark, issue 6) can see where the time goes.  Not part of
+user (and the benchmark) can see where the time goes.  Not part of
 the paper's method."""
 
 import time

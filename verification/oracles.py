@@ -17,7 +17,7 @@ Checks raise ``AssertionError`` naming the first few violations (so a failing
 hypothesis example prints a readable reason) and return a small dict of facts
 on success.
 
-Conventions checked (see notes/CONTRACT.md): triangles (M,3) counter-clockwise;
+Conventions checked (those of docs/design.md): triangles (M,3) counter-clockwise;
 ``neighbors[t, i]`` is the triangle across the edge opposite vertex ``i``, that
 is edge ``(tri[t,(i+1)%3], tri[t,(i+2)%3])``, or -1 on the boundary; segments
 are oriented with the domain on their left (outer loop CCW, holes CW).

@@ -2,8 +2,8 @@
 threading layer, and safe to fork.
 
 - generate (its parallel renumbering) and optimize (the §3 iterations, the
-  3-ring blocks) give the same bits with 1 and 2 threads ("results identical
-  to the serial run", issue 6), and with tbb (the ``fast`` extra) as with
+  3-ring blocks) give the same bits with 1 and 2 threads (results identical
+  to the serial run), and with tbb (the ``fast`` extra) as with
   numba's workqueue;
 - after a mesh in the parent, a forked multiprocessing pool still meshes
   (GNU OpenMP, numba's omp layer, kills such children and the pool waits
