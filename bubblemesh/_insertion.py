@@ -74,7 +74,8 @@ def _prefetch_third_ring_nodes(R, tri, nbr, t):
 
 @njit(cache=True)
 def _bubble(P, R, tri, t, r_e):
-    """Eq. 3-5 for triangle t: stores r_e and returns D_e."""
+    """Eq. 3-5 for triangle t: stores r_e and returns D_e (inf for a sliver
+    whose floating-point area is 0: nothing to fill, never split)."""
     a = unsigned(tri[t, 0])
     b = unsigned(tri[t, 1])
     c = unsigned(tri[t, 2])
@@ -83,6 +84,8 @@ def _bubble(P, R, tri, t, r_e):
     )
     r_e[t] = r
     area = triangle_area(P[a, 0], P[a, 1], P[b, 0], P[b, 1], P[c, 0], P[c, 1])
+    if area == 0.0:
+        return math.inf
     return _bubble_area(r_e, t) / area
 
 

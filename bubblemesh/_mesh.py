@@ -125,6 +125,15 @@ class Mesh:
             raise AttributeError("this mesh was not made by bubblemesh.generate")
         return self.generation
 
+    def check(self) -> None:
+        """GeometryError naming the first inconsistency a kernel could not
+        safely read (shapes, dtypes, index ranges, neighbours, orientation);
+        every function that runs a kernel on a Mesh calls it first.  O(M)."""
+        from .topology import check_mesh
+
+        check_mesh(self.points, self.triangles, self.neighbors, self.radii, self.segments,
+                   self.n_boundary)
+
     def quality(self) -> np.ndarray:
         """Radius ratio of every triangle (eq. 10)."""
         from .quality import radius_ratio

@@ -33,12 +33,18 @@ def boundary_radii(points, loops):
 @njit(cache=True, inline="always")
 def element_radius(ax, ay, ra, bx, by, rb, cx, cy, rc):
     """Eq. 3: reciprocal-distance interpolation of the vertex radii at the centroid.
-    Returns (r_e, centroid x, centroid y)."""
+    Returns (r_e, centroid x, centroid y).  Where the rounded centroid of a
+    sliver falls on a vertex, r_e is that vertex's radius (eq. 3's limit)."""
     ex = (ax + bx + cx) / 3.0
     ey = (ay + by + cy) / 3.0
-    wa = 1.0 / math.sqrt((ax - ex) ** 2 + (ay - ey) ** 2)  # sqrt: hypot is far slower here
-    wb = 1.0 / math.sqrt((bx - ex) ** 2 + (by - ey) ** 2)
-    wc = 1.0 / math.sqrt((cx - ex) ** 2 + (cy - ey) ** 2)
+    la = (ax - ex) ** 2 + (ay - ey) ** 2
+    lb = (bx - ex) ** 2 + (by - ey) ** 2
+    lc = (cx - ex) ** 2 + (cy - ey) ** 2
+    if la == 0.0 or lb == 0.0 or lc == 0.0:
+        return (ra if la == 0.0 else (rb if lb == 0.0 else rc)), ex, ey
+    wa = 1.0 / math.sqrt(la)  # sqrt: hypot is far slower here
+    wb = 1.0 / math.sqrt(lb)
+    wc = 1.0 / math.sqrt(lc)
     return (ra * wa + rb * wb + rc * wc) / (wa + wb + wc), ex, ey
 
 

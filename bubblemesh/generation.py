@@ -24,6 +24,8 @@ bound raises MeshingError instead of looping.
 """
 
 import math
+import numbers
+import os
 
 import numpy as np
 
@@ -33,6 +35,7 @@ from ._renumber import spatial_renumbering
 from ._status import CHUNK_DONE, NEED_CAPACITY, STOP_MAX_INSERTIONS, STOP_POPULATION, raise_for
 from ._workspace import Workspace, fits_int32
 from .bubbles import boundary_radii
+from .domain import Domain
 from .errors import MeshingError
 from .timing import PhaseClock
 from .triangulation import constrained_delaunay
@@ -40,8 +43,32 @@ from .triangulation import constrained_delaunay
 __all__ = ["generate"]
 
 # initial triangle capacity, as a multiple of the expected count (arrays double
-# when full, so this only trades memory against copies)
+# when full, so this only trades memory against copies), and at most
 INITIAL_CAPACITY = 1.1
+MAX_INITIAL_TRIANGLES = 1 << 24
+# memory per triangle: the §2 records, queue and scratch, and the returned arrays
+BYTES_PER_TRIANGLE = 256
+
+
+def _physical_memory() -> int | None:
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def _check_fits(area_geo: float, radii: np.ndarray) -> None:
+    """MeshingError before allocating when even the fewest triangles eq. 6 could
+    stop at (each bubble is at most pi r_max^2) do not fit in memory."""
+    fewest = area_geo / (math.pi * float(radii.max()) ** 2)
+    memory = _physical_memory()
+    if memory is not None and fewest * BYTES_PER_TRIANGLE > memory:
+        raise MeshingError(
+            f"generation: the boundary asks for at least {fewest:.3g} triangles "
+            f"(~{fewest * BYTES_PER_TRIANGLE / 2**30:.3g} GiB, this machine has "
+            f"{memory / 2**30:.3g} GiB): its spacing (largest node bubble "
+            f"{float(radii.max()):.3g}) is far finer than the domain (area {area_geo:.3g}); "
+            "coarsen the boundary or pass max_insertions")
 
 
 def _insertion_bound(domain_area, radii):
@@ -60,8 +87,13 @@ def generate(domain, *, max_insertions=None, progress=False):
     ``bubble_area`` (sum A_e), ``domain_area`` (A_geo) and ``stop`` ("population"
     or "max_insertions") and ``phases`` (seconds in boundary_cdt, setup,
     insertion, renumbering)."""
-    if max_insertions is not None and int(max_insertions) < 0:
-        raise ValueError(f"max_insertions must be >= 0, got {max_insertions}")
+    if not isinstance(domain, Domain):
+        raise TypeError(f"generate: domain must be a bubblemesh.Domain, got "
+                        f"{type(domain).__name__}")
+    if max_insertions is not None and not (
+            isinstance(max_insertions, numbers.Integral) and max_insertions >= 0):
+        raise ValueError(f"generate: max_insertions must be an integer >= 0 or None, "
+                         f"got {max_insertions!r}")
     clock = PhaseClock()
     points = np.asarray(domain.points, dtype=np.float64)
     tri, nbr = constrained_delaunay(points, domain.segments)  # (a)
@@ -70,10 +102,16 @@ def generate(domain, *, max_insertions=None, progress=False):
     area_geo = float(domain.area)
     bound = _insertion_bound(area_geo, radii)
     limit = bound if max_insertions is None else min(int(max_insertions), bound)
+    if max_insertions is None:
+        _check_fits(area_geo, radii)
     expected = int(area_geo / float(np.mean(math.pi * radii**2))) + len(tri)
-    t_cap = max(64, int(INITIAL_CAPACITY * expected) + 2 * len(tri))
+    expected = min(expected, len(tri) + 2 * limit)
+    t_cap = max(64, min(int(INITIAL_CAPACITY * expected), MAX_INITIAL_TRIANGLES) + 2 * len(tri))
     wide = not fits_int32(t_cap)
-    ws = Workspace(points, radii, tri, nbr, len(points) + t_cap // 2 + 16, t_cap, wide)
+    try:
+        ws = Workspace(points, radii, tri, nbr, len(points) + t_cap // 2 + 16, t_cap, wide)
+    except MemoryError as error:
+        raise MeshingError(f"generation: no memory for {t_cap} triangles") from error
     acc = np.zeros(2)
     state = np.zeros(6, np.int64)
     state[S_NPTS] = len(points)
@@ -120,7 +158,11 @@ def _run(ws, state, acc, area_geo, limit, bar):
             if grown_without_progress and not progressed:
                 raise MeshingError("generation: the arrays grew but no insertion followed")
             grown_without_progress = not progressed
-            ws.grow()
+            try:
+                ws.grow()
+            except MemoryError as error:
+                raise MeshingError(f"generation: out of memory after {before} insertions, "
+                                   f"growing to {2 * len(ws.tri)} triangles") from error
         elif status == CHUNK_DONE:
             continue
         elif status < 0:

@@ -32,6 +32,10 @@ the boundary is inside without a walk (the disc of that radius is).  Updates are
 bits as a serial run.
 """
 
+import math
+import numbers
+from typing import Any
+
 import numpy as np
 
 from ._forces import move, resize
@@ -64,8 +68,11 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
     docstring).  The returned ``radii`` are the §3 bubbles: every radius
     amplified (§3.1), the boundary ones then fixed, the interior ones from
     eq. 9 (the paper's panel (d), "optimised node bubbles")."""
+    if not isinstance(mesh, Mesh):
+        raise TypeError(f"optimize: mesh must be a bubblemesh.Mesh, got {type(mesh).__name__}")
     _check_parameters(amplification=amplification, alpha=alpha, skin=skin, rings=rings,
                       max_iterations=max_iterations, tol=tol)
+    mesh.check()
     clock = PhaseClock()
     n_b = mesh.n_boundary
     P0 = np.ascontiguousarray(mesh.points)
@@ -124,19 +131,31 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
                 generation=mesh.generation, optimization=stats)
 
 
-def _check_parameters(*, amplification, alpha, skin, rings, max_iterations, tol):
-    """ValueError naming the first parameter outside its meaningful range."""
+# Accepted ranges: beyond them two nodes can be pushed onto one point (alpha
+# 0.4 and more) or nearly every mesh degenerates (amplification above 2).
+MAX_ALPHA, MAX_AMPLIFICATION, MAX_RINGS = 0.3, 2.0, 6
+
+
+def _real(value: Any) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def _check_parameters(*, amplification: Any, alpha: Any, skin: Any, rings: Any,
+                      max_iterations: Any, tol: Any) -> None:
+    """ValueError naming the first parameter outside its accepted range."""
     rules = [
-        ("amplification", amplification, amplification > 0, "> 0"),
-        ("alpha", alpha, alpha > 0, "> 0"),
-        ("skin", skin, skin > 0, "> 0 (inf disables the lists)"),
-        ("rings", rings, int(rings) == rings and rings >= 1, "an integer >= 1"),
-        ("max_iterations", max_iterations, int(max_iterations) == max_iterations
-         and max_iterations >= 0, "an integer >= 0"),
-        ("tol", tol, tol >= 0, ">= 0"),
+        ("amplification", amplification, lambda v: 0 < v <= MAX_AMPLIFICATION,
+         f"in (0, {MAX_AMPLIFICATION}]"),
+        ("alpha", alpha, lambda v: 0 < v <= MAX_ALPHA, f"in (0, {MAX_ALPHA}]"),
+        ("skin", skin, lambda v: v > 0, "> 0 (inf disables the lists)"),
+        ("rings", rings, lambda v: isinstance(v, numbers.Integral) and 1 <= v <= MAX_RINGS,
+         f"an integer in 1..{MAX_RINGS}"),
+        ("max_iterations", max_iterations,
+         lambda v: isinstance(v, numbers.Integral) and v >= 0, "an integer >= 0"),
+        ("tol", tol, lambda v: math.isfinite(v) and v >= 0, "finite and >= 0"),
     ]
     for name, value, ok, expected in rules:
-        if not ok:
+        if not (_real(value) and ok(value)):
             raise ValueError(f"optimize: {name} must be {expected}, got {value!r}")
 
 

@@ -10,7 +10,7 @@ from numba import njit
 from .errors import GeometryError
 from .predicates import orient2d
 
-__all__ = ["boundary_first", "neighbors_of", "oriented_neighbors"]
+__all__ = ["boundary_first", "check_mesh", "neighbors_of", "oriented_neighbors"]
 
 
 @njit(cache=True)
@@ -90,3 +90,71 @@ def boundary_first(triangles: np.ndarray, neighbors: np.ndarray, n_points: int
     on_boundary[segments.ravel()] = True
     order = np.concatenate([np.flatnonzero(on_boundary), np.flatnonzero(~on_boundary)])
     return order, int(on_boundary.sum()), segments
+
+
+_FAULTS = {
+    1: "refers to a node out of range",
+    2: "has a neighbour id out of range",
+    3: "has a neighbour that does not share that edge back",
+    4: "is not counter-clockwise (or has zero area)",
+}
+
+
+@njit(cache=True)
+def _first_fault(P: np.ndarray, T: np.ndarray, N: np.ndarray) -> tuple[int, int]:
+    """(fault code, triangle) of the first inconsistency, (0, -1) if none: node
+    ids in range, neighbour ids in range and reciprocal across the same edge,
+    positive exact orientation.  Every read is checked before it is made."""
+    n, m = P.shape[0], T.shape[0]
+    for t in range(m):
+        for i in range(3):
+            if T[t, i] < 0 or T[t, i] >= n:
+                return 1, t
+    for t in range(m):
+        for i in range(3):
+            s = N[t, i]
+            if s < -1 or s >= m:
+                return 2, t
+            if s >= 0:
+                u, w = T[t, (i + 1) % 3], T[t, (i + 2) % 3]
+                back = False
+                for j in range(3):
+                    if T[s, (j + 1) % 3] == w and T[s, (j + 2) % 3] == u and N[s, j] == t:
+                        back = True
+                if not back:
+                    return 3, t
+    for t in range(m):
+        a, b, c = T[t, 0], T[t, 1], T[t, 2]
+        if orient2d(P[a, 0], P[a, 1], P[b, 0], P[b, 1], P[c, 0], P[c, 1]) <= 0.0:
+            return 4, t
+    return 0, -1
+
+
+def check_mesh(points: np.ndarray, triangles: np.ndarray, neighbors: np.ndarray,
+               radii: np.ndarray, segments: np.ndarray, n_boundary: int) -> None:
+    """GeometryError naming the first array, triangle or value that a kernel
+    could not safely read: shapes and dtypes, finite points, positive radii,
+    index ranges, reciprocal neighbours, counter-clockwise triangles.  O(M)."""
+    n = len(points)
+    shapes = {"points": (points, (n, 2), "f"), "triangles": (triangles, (None, 3), "iu"),
+              "neighbors": (neighbors, (len(triangles), 3), "iu"),
+              "radii": (radii, (n,), "f"), "segments": (segments, (None, 2), "iu")}
+    for name, (array, shape, kinds) in shapes.items():
+        if array.ndim != len(shape) or any(s is not None and s != a
+                                          for s, a in zip(shape, array.shape)):
+            want = "(" + ", ".join("M" if s is None else str(s) for s in shape) + ")"
+            raise GeometryError(f"mesh {name} has shape {array.shape}, expected {want}")
+        if array.dtype.kind not in kinds:
+            raise GeometryError(f"mesh {name} has dtype {array.dtype}")
+    if not np.isfinite(points).all():
+        raise GeometryError("mesh points must be finite")
+    if not (np.isfinite(radii).all() and (radii > 0).all()):
+        raise GeometryError("mesh radii must be finite and > 0")
+    if not 0 <= n_boundary <= n:
+        raise GeometryError(f"mesh n_boundary = {n_boundary} is outside 0..{n}")
+    if segments.size and (segments.min() < 0 or segments.max() >= n):
+        raise GeometryError("a mesh segment refers to a node out of range")
+    code, t = _first_fault(points, np.asarray(triangles, np.int64),
+                           np.asarray(neighbors, np.int64))
+    if code:
+        raise GeometryError(f"mesh triangle {t} {_FAULTS[code]}")

@@ -64,7 +64,7 @@ def test_optimize_invariants_with_short_runs(case):
     invariants hold after any number of iterations, not only at convergence."""
     dom = bm.Domain.from_loops(list(case.loops))
     before = bm.generate(dom)
-    for kw in ({"max_iterations": 1}, {"max_iterations": 5, "alpha": 0.5}):
+    for kw in ({"max_iterations": 1}, {"max_iterations": 5, "alpha": 0.3}):
         after = bm.optimize(before, **kw)
         check_optimization_invariants(case, before, after)
 
@@ -136,7 +136,13 @@ def test_optimize_square_with_hole():
 @pytest.mark.parametrize(
     "option, value",
     [("amplification", 0.0), ("alpha", -0.1), ("skin", 0.0), ("rings", 0), ("rings", 1.5),
-     ("max_iterations", -1), ("tol", -1e-3)],
+     ("max_iterations", -1), ("tol", -1e-3),
+     # beyond the accepted ranges, where nodes can meet or meshes degenerate
+     ("alpha", 0.5), ("alpha", 1e300), ("alpha", float("inf")), ("amplification", 3.0),
+     ("amplification", float("inf")), ("rings", 7),
+     # not numbers, not finite
+     ("alpha", float("nan")), ("tol", float("nan")), ("max_iterations", float("inf")),
+     ("max_iterations", 2.5), ("alpha", "0.1"), ("rings", None), ("amplification", 1j)],
 )
 def test_optimize_rejects_meaningless_parameters(option, value):
     mesh = bm.generate(bm.Domain.from_loops(S.disk(24).loops))
@@ -145,7 +151,7 @@ def test_optimize_rejects_meaningless_parameters(option, value):
 
 
 def test_generate_rejects_negative_max_insertions():
-    with pytest.raises(ValueError, match="max_insertions must be >= 0"):
+    with pytest.raises(ValueError, match="max_insertions must be an integer >= 0"):
         bm.generate(bm.Domain.from_loops(S.disk(24).loops), max_insertions=-1)
 
 

@@ -1,0 +1,128 @@
+"""Inputs that once crashed the interpreter or escaped as foreign exceptions:
+each must now give a valid mesh or a bubblemesh exception naming what and
+where.  Oracles: the exact validity and conformity checks of ``oracles``."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from fractions import Fraction
+
+import numpy as np
+import oracles as O
+import pytest
+import strategies as S
+
+import bubblemesh as bm
+
+# polygons whose rounded centroids land exactly on a vertex (eq. 3 divided by 0)
+_ON_VERTEX = {
+    "decimal grid": [[(0.6000000000000001, 0.7000000000000001), (0.5, 0.9),
+                      (0.7000000000000001, 0.5), (0.5, 1.1)]],
+    "sliver": [[(5.0, 6.0), (3.0, 3.0), (7.000000000000001, 9.0)]],
+}
+
+
+def _offset_square():
+    """An 8x8 square spaced 0.5 at offset 1e15: neighbours 4 ulps apart."""
+    x = np.arange(0.0, 8.0, 0.5)
+    zero, eight = np.zeros_like(x), np.full_like(x, 8.0)
+    ring = np.concatenate([np.column_stack([x, zero]), np.column_stack([eight, x]),
+                           np.column_stack([8.0 - x, eight]), np.column_stack([zero, 8.0 - x])])
+    return [ring + 1e15]
+
+
+@pytest.mark.parametrize("loops", [*_ON_VERTEX.values(), _offset_square()],
+                         ids=[*_ON_VERTEX, "offset 1e15"])
+def test_centroids_on_a_vertex_give_a_valid_mesh(loops):
+    domain = bm.Domain.from_loops(loops)
+    polygon = _exact_polygon_area(domain.points, domain.segments)
+    for mesh in (bm.generate(domain), bm.mesh(domain)):
+        O.check_valid(mesh.points, mesh.triangles, mesh.neighbors)
+        # the areas exactly (a sliver's float area is all rounding), then the rest
+        assert _exact_area(mesh.points, mesh.triangles) == polygon
+        O.check_conforming(mesh.points, mesh.triangles, domain.segments, rel=1.0)
+        assert np.array_equal(mesh.points[: mesh.n_boundary], domain.points)
+
+
+def _fractions(points):
+    return [(Fraction(float(x)), Fraction(float(y))) for x, y in points]
+
+
+def _exact_area(points, triangles):
+    """Twice the area of all triangles, exactly."""
+    P = _fractions(points)
+    total = Fraction(0)
+    for a, b, c in triangles:
+        (ax, ay), (bx, by), (cx, cy) = P[a], P[b], P[c]
+        total += (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+    return total
+
+
+def _exact_polygon_area(points, segments):
+    """Twice the area enclosed by the oriented segments (shoelace), exactly."""
+    P = _fractions(points)
+    return sum((P[v][0] * P[w][1] - P[w][0] * P[v][1] for v, w in segments), Fraction(0))
+
+
+@pytest.fixture(scope="module")
+def square():
+    return bm.generate(bm.Domain.from_loops(list(S.square_with_hole().loops)))
+
+
+_BROKEN = {  # kind: (how the generated mesh is broken, words of the message)
+    "node id out of range": ("t = m.triangles.copy(); t[5, 1] = len(m.points) + 10; "
+                             "b = replace(m, triangles=t)", "out of range"),
+    "garbage neighbours": ("b = replace(m, neighbors=np.random.default_rng(0).integers("
+                           "-5, 10**6, m.neighbors.shape))", "neighbour"),
+    "last triangle dropped": ("b = replace(m, triangles=m.triangles[:-1])", "shape"),
+    "both dropped": ("b = replace(m, triangles=m.triangles[:-1], neighbors=m.neighbors[:-1])",
+                     "neighbour"),
+    "clockwise": ("b = replace(m, triangles=m.triangles[:, [0, 2, 1]])", "neighbour"),
+    "nan point": ("p = m.points.copy(); p[9] = np.nan; b = replace(m, points=p)", "finite"),
+    "zero radius": ("b = replace(m, radii=0 * m.radii)", "radii"),
+    "n_boundary": ("b = replace(m, n_boundary=len(m.points) + 1)", "n_boundary"),
+}
+
+
+def test_a_broken_mesh_is_refused_before_any_kernel_reads_it():
+    """In a child process, so that a kernel reading out of bounds is a failed
+    test (the child's signal), not a crashed test run."""
+    script = [
+        "import numpy as np, bubblemesh as bm", "from dataclasses import replace",
+        "t = np.linspace(0, 2 * np.pi, 40, endpoint=False)",
+        "m = bm.generate(bm.Domain.from_loops([np.column_stack([np.cos(t), np.sin(t)])]))",
+    ]
+    for breaking, _ in _BROKEN.values():
+        script += [f"{breaking}", "try:", "    bm.optimize(b); print('accepted')",
+                   "except Exception as e: print(type(e).__name__, '|', e, flush=True)"]
+    run = subprocess.run([sys.executable, "-c", "\n".join(script)], capture_output=True,
+                         text=True, timeout=600)
+    assert run.returncode == 0, f"the child died ({run.returncode}): {run.stderr[-2000:]}"
+    lines = run.stdout.splitlines()
+    assert len(lines) == len(_BROKEN), run.stdout
+    for (kind, (_, words)), line in zip(_BROKEN.items(), lines):
+        assert line.startswith("GeometryError |") and words in line, f"{kind}: {line}"
+
+
+def test_a_generated_mesh_passes_the_check(square):
+    square.check()  # must not raise: the check accepts what generate makes
+
+
+@pytest.mark.parametrize("thing", [None, "mesh.vtu", 3.0])
+def test_optimize_and_generate_want_their_own_types(thing, square):
+    with pytest.raises(TypeError, match="must be a bubblemesh.Mesh"):
+        bm.optimize(thing)
+    with pytest.raises(TypeError, match="must be a bubblemesh.Domain"):
+        bm.generate(thing)
+    with pytest.raises(TypeError, match="must be a bubblemesh.Mesh"):
+        bm.optimize(square.domain)
+
+
+def test_a_boundary_finer_than_memory_allows_is_refused_up_front():
+    t = np.linspace(0.0, 2.0 * np.pi, 100_000, endpoint=False)
+    domain = bm.Domain.from_loops([np.column_stack([np.cos(t), np.sin(t)])])
+    with pytest.raises(bm.MeshingError, match=r"at least .* triangles .*GiB"):
+        bm.generate(domain)
+    only_boundary = bm.generate(domain, max_insertions=0)  # sized for what it builds
+    assert len(only_boundary.points) == 100_000 and only_boundary.insertions == 0
