@@ -17,7 +17,6 @@ from types import ModuleType
 _NOT_CASES = {
     "geometry",
     "peers",
-    "metrics",
     "plots",
     "report",
     "reproduce",

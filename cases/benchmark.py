@@ -1,6 +1,7 @@
-"""Speed and memory benchmark (issue 6): the unit disk from ~1k to ~1M elements.
+"""Speed and memory benchmark: the unit disk from ~1k to ~1M elements.
 
-    python -m cases.benchmark [--max-elements 1000000] [--repeats 3] [--quick] [--out reports]
+    bubblemesh bench [--max-elements 1000000] [--repeats 3] [--quick] [--out reports]
+    python -m cases.benchmark ...   (the same, plus --no-serial)
 
 The unit disk with ``n`` uniformly spaced boundary nodes; bubblemesh's §2 mesh
 of it has ``C_DISK · n²`` elements (C_DISK measured: 0.1838, constant from 64
@@ -21,9 +22,10 @@ final re-triangulation) and ``bubblemesh_total`` (both), with numba's default
 threads, and ``bubblemesh_optimize_1thread`` / ``bubblemesh_total_1thread``
 with ``NUMBA_NUM_THREADS=1`` (what the parallel loops gain, or cost on a busy
 machine; not in quick mode); ``triangle``
-(``pq30a<A>YQ``, A tuned untimed to the §2 element count); ``gmsh_frontal``
-(``Mesh.Algorithm=6``, uniform size tuned untimed to the same count; only up to
-``GMSH_CAP`` elements, as it is far slower).  ``ratio_to_triangle`` is the
+(``cases.peers``' Triangle run, ``pq30a<A>YQ``, A tuned untimed to the §2 element
+count); ``gmsh_frontal`` (``cases.peers``' Gmsh run with ``Mesh.Algorithm=6`` and a
+uniform size tuned untimed to the same count; only up to ``GMSH_CAP`` elements, as it
+is far slower).  ``ratio_to_triangle`` is the
 per-element time over Triangle's at the same size.  The cold numba compile
 time (empty cache) and the warm first call (filled cache) are measured in fresh
 processes too.  Writes ``benchmark.csv``, ``benchmark.json`` (slopes, compile
@@ -64,6 +66,17 @@ COLUMNS = [
 ]
 
 
+LABELS = {  # the methods' names in the report and the plot
+    "bubblemesh_generate": "bubblemesh generate (§2)",
+    "bubblemesh_optimize": "bubblemesh optimize (§3)",
+    "bubblemesh_total": "bubblemesh generate + optimize",
+    "bubblemesh_optimize_1thread": "bubblemesh optimize (§3), 1 thread",
+    "bubblemesh_total_1thread": "bubblemesh generate + optimize, 1 thread",
+    "triangle": "Triangle pq30",
+    "gmsh_frontal": "Gmsh Frontal-Delaunay",
+}
+
+
 def boundary_nodes_for(target: int) -> int:
     return max(12, int(round(np.sqrt(target / C_DISK))))
 
@@ -87,7 +100,7 @@ def _child_bubblemesh(n, repeats):
     import bubblemesh as bm
 
     for _ in range(2):  # warm-up: load/compile every kernel (a 16-node disk left some paths cold)
-        bm.optimize(bm.generate(bm.Domain.from_loops(_disk(64))))
+        bm.mesh(bm.Domain.from_loops(_disk(64)))
     base = _rss_mb()
     dom = bm.Domain.from_loops(_disk(n))
     gen = []
@@ -110,43 +123,40 @@ def _child_bubblemesh(n, repeats):
         opt.append(t2 - t1)
         tot.append(t2 - t0)
     peak = _rss_mb()
-    ne = len(m.triangles)
-    note = f"optimize: {o.stats.get('iterations', '?')} iterations"
-    gen_phases = _phases(m.stats.get("phases", {}))
-    opt_phases = _phases(o.stats.get("optimize_phases", {}))
+    gen_phases, opt_phases = m.stats.get("phases", {}), o.stats.get("optimize_phases", {})
+
+    def row(method, mesh, seconds, top, note, phases=None):
+        return dict(method=method, elements=len(mesh.triangles), seconds=min(seconds), peak_mb=top,
+                    peak_delta_mb=top - base, note=note, phases=phases or {})
+
     return [
-        dict(
-            method="bubblemesh_generate",
-            elements=ne,
-            seconds=min(gen),
-            peak_mb=peak_gen,
-            peak_delta_mb=peak_gen - base,
-            note=f"peak over generate-only repetitions; last run's phases: {gen_phases}",
-            phases=m.stats.get("phases", {}),
-        ),
-        dict(
-            method="bubblemesh_optimize",
-            elements=len(o.triangles),
-            seconds=min(opt),
-            peak_mb=peak,
-            peak_delta_mb=peak - base,
-            note=note + f"; peak of the whole pipeline; last run's phases: {opt_phases}",
-            phases=o.stats.get("optimize_phases", {}),
-        ),
-        dict(
-            method="bubblemesh_total",
-            elements=len(o.triangles),
-            seconds=min(tot),
-            peak_mb=peak,
-            peak_delta_mb=peak - base,
-            note="generate + optimize",
-        ),
-    ]
+        row("bubblemesh_generate", m, gen, peak_gen, "peak over generate-only repetitions; "
+            f"last run's phases: {_phases(gen_phases)}", gen_phases),
+        row("bubblemesh_optimize", o, opt, peak, f"optimize: {o.stats.get('iterations', '?')} "
+            f"iterations; peak of the whole pipeline; last run's phases: {_phases(opt_phases)}",
+            opt_phases),
+        row("bubblemesh_total", o, tot, peak, "generate + optimize"),
+    ]  # fmt: skip
+
+
+PHASES = {  # bubblemesh's stats phase names, in words
+    "boundary_cdt": "boundary triangulation",
+    "insertion": "node insertion",
+    "rings": "neighbour rings",
+    "lists": "neighbour lists",
+    "move": "node moves",
+    "resize": "bubble resizing",
+    "retriangulation": "re-triangulation",
+}
+
+
+def phase_name(key: str) -> str:
+    return PHASES.get(key, key.replace("_", " "))
 
 
 def _phases(seconds: dict) -> str:
     """'name 1.23 s, ...' from a stats phase dict (where the time goes)."""
-    return ", ".join(f"{k} {v:.3g} s" for k, v in seconds.items())
+    return ", ".join(f"{phase_name(k)} {v:.3g} s" for k, v in seconds.items())
 
 
 def _iterations_tradeoff(df, targets, repeats) -> list[dict]:
@@ -185,7 +195,7 @@ def _child_iterations(n, repeats):
     the paper leaves the count open ("if more iterations are needed")."""
     import bubblemesh as bm
 
-    bm.optimize(bm.generate(bm.Domain.from_loops(_disk(64))))
+    bm.mesh(bm.Domain.from_loops(_disk(64)))
     dom = bm.Domain.from_loops(_disk(n))
     rows = []
     for k in ITERATIONS:
@@ -193,7 +203,7 @@ def _child_iterations(n, repeats):
         for _ in range(repeats):
             o = None
             t0 = time.perf_counter()
-            o = bm.optimize(bm.generate(dom), max_iterations=k, tol=0.0)
+            o = bm.mesh(dom, max_iterations=k, tol=0.0)
             best = min(best, time.perf_counter() - t0)
         rho = o.quality()
         rows.append(dict(iterations=k, elements=len(o.triangles), seconds=best,
@@ -203,103 +213,37 @@ def _child_iterations(n, repeats):
 
 
 def _child_triangle(n, repeats, target):
-    import triangle as tr
-
     from cases import peers
 
     loops = _disk(n)
-    pts, segs = peers._segments(_disk(12))
-    tr.triangulate({"vertices": pts, "segments": segs}, "pq30a0.05YQ")  # warm-up
-    pts, segs = peers._segments(loops)
-    data = {"vertices": pts, "segments": segs}
-    area, best = np.pi / target, None
-    for _ in range(4):  # untimed tuning of the area bound to the element count
-        ne = len(tr.triangulate(data, f"pq30a{peers.triangle_number(area)}YQ")["triangles"])
-        if best is None or abs(np.log(ne / target)) < abs(np.log(best[1] / target)):
-            best = (area, ne)
-        area *= ne / target
-    area = best[0]
-    base = _rss_mb()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        out = tr.triangulate(data, f"pq30a{peers.triangle_number(area)}YQ")
-        times.append(time.perf_counter() - t0)
-    peak = _rss_mb()
-    return [
-        dict(
-            method="triangle",
-            elements=len(out["triangles"]),
-            seconds=min(times),
-            peak_mb=peak,
-            peak_delta_mb=peak - base,
-            note=f"pq30a{peers.triangle_number(area)}YQ",
-        )
-    ]
+    peers._triangle(_disk(12), 20, tuning_runs=1)  # warm-up
+    _, _, _, info = peers._triangle(loops, target, tuning_runs=4)  # untimed tuning
+    return [_timed("triangle", repeats, peers._triangle, loops, target,
+                   area=info["parameter"], tuning_runs=1)]
 
 
 def _child_gmsh(n, repeats, target):
-    loops = _disk(n)
-    _gmsh_at(_disk(12), 1.0)  # warm-up
-    factor, best = 1.0, None
-    for _ in range(3):  # untimed tuning of the uniform size to the element count
-        ne, _ = _gmsh_at(loops, factor)
-        if best is None or abs(np.log(ne / target)) < abs(np.log(best[1] / target)):
-            best = (factor, ne)
-        factor *= float(np.sqrt(ne / target))
-    factor = best[0]
-    base = _rss_mb()
-    runs = [_gmsh_at(loops, factor) for _ in range(repeats)]
-    peak = _rss_mb()
-    return [
-        dict(
-            method="gmsh_frontal",
-            elements=runs[-1][0],
-            seconds=min(r[1] for r in runs),
-            peak_mb=peak,
-            peak_delta_mb=peak - base,
-            note=f"Mesh.Algorithm=6, uniform size {factor:.4g} x boundary spacing, "
-            "boundary transfinite",
-        )
-    ]
-
-
-def _gmsh_at(loops, factor):
-    """One Gmsh Frontal-Delaunay run of the disk at uniform size factor x boundary spacing,
-    boundary nodes kept (transfinite segments).  Returns (elements, seconds w/o initialize)."""
-    import gmsh
-
     from cases import peers
 
-    loop = loops[0]
-    sizes = peers._node_sizes(loop)
-    gmsh.initialize(readConfigFiles=False, interruptible=False)
-    try:
-        for k, v in (
-            ("General.Terminal", 0),
-            ("General.Verbosity", 0),
-            ("General.NumThreads", 1),
-            ("Mesh.Algorithm", 6),
-            ("Mesh.MeshSizeExtendFromBoundary", 0),
-            ("Mesh.MeshSizeFromCurvature", 0),
-            ("Mesh.MeshSizeMin", factor * sizes.mean()),
-            ("Mesh.MeshSizeMax", factor * sizes.mean()),
-        ):
-            gmsh.option.setNumber(k, float(v))
-        t0 = time.perf_counter()
-        nn = len(loop)
-        pt = [gmsh.model.geo.addPoint(x, y, 0.0, h) for (x, y), h in zip(loop, sizes, strict=True)]
-        ln = [gmsh.model.geo.addLine(pt[i], pt[(i + 1) % nn]) for i in range(nn)]
-        for lt in ln:
-            gmsh.model.geo.mesh.setTransfiniteCurve(lt, 2)
-        surf = gmsh.model.geo.addPlaneSurface([gmsh.model.geo.addCurveLoop(ln)])
-        gmsh.model.geo.synchronize()
-        gmsh.model.mesh.generate(2)
-        _, en = gmsh.model.mesh.getElementsByType(2, surf)
-        sec = time.perf_counter() - t0
-    finally:
-        gmsh.finalize()
-    return len(en) // 3, sec
+    loops = _disk(n)
+    peers._gmsh(_disk(12), 20, 6, uniform=True, tuning_runs=1)  # warm-up
+    _, _, _, info = peers._gmsh(loops, target, 6, uniform=True)  # untimed tuning
+    return [_timed("gmsh_frontal", repeats, peers._gmsh, loops, target, 6, uniform=True,
+                   factor=info["parameter"], tuning_runs=1)]
+
+
+def _timed(method, repeats, peer, *args, **kwargs) -> dict:
+    """``repeats`` runs of a tuned peer (one mesh each): the minimum of its own timings
+    (package start-up excluded) and the peak memory they reached."""
+    base = _rss_mb()
+    seconds = []
+    for _ in range(repeats):
+        out = None  # one mesh alive at a time: the peak is one run's
+        out = peer(*args, **kwargs)
+        seconds.append(out[2])
+    peak = _rss_mb()
+    return dict(method=method, elements=len(out[1]), seconds=min(seconds), peak_mb=peak,
+                peak_delta_mb=peak - base, note=out[3]["options"])
 
 
 def _child(spec: dict) -> list[dict]:
@@ -343,7 +287,7 @@ def _threading_info() -> dict:
     environment variables that change them."""
     code = (
         "import bubblemesh as bm, numba; from cases.geometry import circle;"
-        "bm.optimize(bm.generate(bm.Domain.from_loops([circle((0,0),1,16)])));"
+        "bm.mesh(bm.Domain.from_loops([circle((0,0),1,16)]));"
         "print(numba.threading_layer(), numba.get_num_threads())"
     )
     root = str(Path(__file__).resolve().parent.parent)
@@ -379,7 +323,7 @@ def compile_times(timeout: float = 900) -> dict:
         "import time; t0=time.perf_counter(); import bubblemesh as bm; from cases.geometry import "
         "circle;"
         "t1=time.perf_counter(); "
-        "bm.optimize(bm.generate(bm.Domain.from_loops([circle((0,0),1,16)])));"
+        "bm.mesh(bm.Domain.from_loops([circle((0,0),1,16)]));"
         "t2=time.perf_counter(); print(t1-t0, t2-t1)"
     )
     root = str(Path(__file__).resolve().parent.parent)
@@ -413,7 +357,7 @@ def loglog_slope(df, method, min_elements=SLOPE_FROM):
 
 
 def check_targets(df, slopes: dict, compile_: dict) -> list[dict]:
-    """Issue 6's targets checked against the measured rows: target, measured value, met."""
+    """The speed targets checked against the measured rows: target, measured value, met."""
     ok = df[df.status == "ok"]
 
     def at(method, size):  # the row of ``method`` whose element count is nearest ``size``
@@ -545,7 +489,7 @@ def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress
                 dict(
                     method="gmsh_frontal",
                     status="skipped",
-                    note=f"not run above {gmsh_cap} elements (too slow; cap GMSH_CAP)",
+                    note=f"not run above {gmsh_cap} elements (too slow)",
                 )
             )
         for r in got:
@@ -574,7 +518,7 @@ def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress
     meta.update(
         quick=quick,
         repeats=repeats,
-        targets=targets,
+        sizes=targets,
         gmsh_cap=gmsh_cap,
         c_disk=C_DISK,
         slope_from_elements=SLOPE_FROM,
@@ -594,7 +538,7 @@ def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress
     (out / "benchmark.json").write_text(json.dumps(meta, indent=2, default=str) + "\n")
     ok = df[df.status == "ok"]
     if not ok.empty:
-        plots.benchmark(out / "figures" / "benchmark.png", ok)
+        plots.benchmark(out / "figures" / "benchmark.png", ok, LABELS)
     for m, s in slopes.items():
         print(f"log-log slope of seconds vs elements (>= {SLOPE_FROM} elements), {m}: {s:.3f}")
     print(f"compile: {meta['compile']}")

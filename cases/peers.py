@@ -69,8 +69,6 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from cases import metrics
-
 __all__ = [
     "PEERS",
     "GENERATORS",
@@ -80,6 +78,7 @@ __all__ = [
     "laplacian_smooth",
     "hole_points",
     "triangle_number",
+    "boundary_shift",
     "peer_versions",
 ]
 
@@ -147,6 +146,34 @@ def _inverted(points: np.ndarray, tri: np.ndarray) -> int:
     return int((area2 <= 0).sum())
 
 
+def _boundary_nodes(triangles: np.ndarray) -> np.ndarray:
+    """Nodes on an edge used by exactly one triangle."""
+    t = np.asarray(triangles, dtype=np.int64)
+    e = np.sort(np.vstack([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
+    u, cnt = np.unique(e, axis=0, return_counts=True)
+    return np.unique(u[cnt == 1])
+
+
+def boundary_shift(
+    boundary: np.ndarray, points: np.ndarray, triangles: np.ndarray
+) -> tuple[float, int]:
+    """How far the given boundary nodes moved in a mesh, and how many boundary nodes it has.
+
+    Returns ``(shift, n_boundary)``: ``shift`` is the largest distance from a
+    given boundary node to the nearest node on the mesh's boundary (0 when every
+    boundary node is kept), ``n_boundary`` the mesh's count of boundary nodes
+    (equal to ``len(boundary)`` when none were added or removed).
+    """
+    from scipy.spatial import cKDTree
+
+    p = np.asarray(points, dtype=np.float64)[:, :2]
+    bn = _boundary_nodes(triangles)
+    if len(bn) == 0:
+        return float("inf"), 0
+    d, _ = cKDTree(p[bn]).query(np.asarray(boundary, dtype=np.float64)[:, :2])
+    return float(d.max()), int(len(bn))
+
+
 def triangle_number(x: float) -> str:
     """``x`` with 6 significant digits and no exponent: Triangle's switch parser reads only
     digits and '.', so 'a3.1e-05' would mean area bound 3.1 followed by switch 'e'."""
@@ -167,7 +194,10 @@ def _closest(runs: list[tuple], target: int):
 # --------------------------------------------------------------------------- Triangle
 
 
-def _triangle(loops, target):
+def _triangle(loops, target, area=None, tuning_runs=TUNING_RUNS):
+    """Triangle tuned to ``target`` elements from the area bound ``area`` (default: domain
+    area / target); ``tuning_runs=1`` is one run at ``area``.  ``info["parameter"]`` is the
+    area bound of the returned run."""
     import triangle as tr
 
     pts, segs = _segments(loops)
@@ -175,24 +205,25 @@ def _triangle(loops, target):
     holes = hole_points(loops)
     if len(holes):
         data["holes"] = holes
-    area = _domain_area(loops) / target
+    area = _domain_area(loops) / target if area is None else float(area)
     runs = []
-    for _ in range(TUNING_RUNS):
+    for _ in range(tuning_runs):
         opts = f"pq{TRIANGLE_MIN_ANGLE}a{triangle_number(area)}YQ"
         t0 = time.perf_counter()
         out = tr.triangulate(data, opts)
         sec = time.perf_counter() - t0
         p, t = np.asarray(out["vertices"], np.float64), np.asarray(out["triangles"], np.int64)
-        runs.append((opts, len(t), p, t, sec))
+        runs.append((opts, len(t), p, t, sec, area))
         if len(t) == target:
             break
         area *= len(t) / target
-    opts, _, p, t, sec = runs[-1] if len(runs) == 1 else _closest(runs, target)
+    opts, _, p, t, sec, area = _closest(runs, target)
     return (
         p,
         _ccw(p, t),
         sec,
         {
+            "parameter": area,
             "options": f"triangle.triangulate(..., '{opts}') (p: PSLG, q{TRIANGLE_MIN_ANGLE}: min "
             "angle, "
             f"a: max area, Y: no boundary Steiner points, Q: quiet)",
@@ -210,8 +241,10 @@ def _node_sizes(loop: np.ndarray) -> np.ndarray:
     return 0.5 * (seg_len + np.roll(seg_len, 1))
 
 
-def _gmsh(loops, target, algorithm, uniform=False):
-    """Gmsh on the boundary nodes; sizes interpolated from them (or uniform, for the benchmark)."""
+def _gmsh(loops, target, algorithm, uniform=False, factor=1.0, tuning_runs=TUNING_RUNS):
+    """Gmsh on the boundary nodes; sizes interpolated from them (or uniform, for the benchmark),
+    times ``factor``, tuned to ``target`` elements over ``tuning_runs`` runs (1: one run at
+    ``factor``).  ``info["parameter"]`` is the factor of the returned run."""
     import gmsh
     from scipy.spatial import cKDTree
 
@@ -229,8 +262,8 @@ def _gmsh(loops, target, algorithm, uniform=False):
         gmsh.option.setNumber("Mesh.Algorithm", algorithm)
         gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
         gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
-        factor, runs = 1.0, []
-        for _ in range(TUNING_RUNS):
+        factor, runs = float(factor), []
+        for _ in range(tuning_runs):
             gmsh.clear()
             gmsh.model.add("case")
             t0 = time.perf_counter()
@@ -292,6 +325,7 @@ def _gmsh(loops, target, algorithm, uniform=False):
         _ccw(p, t),
         sec,
         {
+            "parameter": factor,
             "options": f"gmsh {gmsh.__version__} Mesh.Algorithm={algorithm} ({name}), boundary "
             "segments "
             f"transfinite with 2 nodes, node size = mean adjacent segment length, "
@@ -490,7 +524,7 @@ def run_peer(
             p, t, sec, info = _laplacian_uniform(base, len(boundary), laplacian_steps)
     except Exception as exc:
         return _skip(f"{type(exc).__name__}: {exc}", status="failed")
-    shift, nb = metrics.boundary_shift(boundary, p, t)
+    shift, nb = boundary_shift(boundary, p, t)
     info.update(
         status="ok", reason="", boundary_shift=shift, boundary_nodes=nb, inverted=_inverted(p, t)
     )

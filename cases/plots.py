@@ -15,7 +15,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.collections import EllipseCollection  # noqa: E402
 
-BINS = np.linspace(0.0, 1.0, 21)  # 0.05 wide, as the paper's histograms
+BIN_WIDTH = 0.025  # half the paper's 0.05: the informative range is narrower than 0..1
 LOW = 0.7  # the paper's "low radius ratio" threshold
 _SAVE = dict(dpi=110, bbox_inches="tight", metadata={"Software": None})
 
@@ -84,28 +84,32 @@ def _bubbles(ax, points, radii, triangles, title):
     ax.set_title(title, fontsize=9)
 
 
-def _hist(ax, rho, title, color="tab:blue", ref=None):
-    w = np.full(len(rho), 100.0 / max(len(rho), 1))
+def rho_axis(*rhos) -> np.ndarray:
+    """Histogram bins over the informative range of ρ: from the lowest 1st percentile of the
+    given samples, floored to 0.05 and at most 0.6 (the ρ = 0.7 line stays in view), to 1.
+    Values below the first edge are counted in the first bin (the histograms clip them)."""
+    lows = [np.percentile(r, 1) for r in rhos if len(r)]
+    lo = min(0.6, np.floor(min(lows, default=0.0) / 0.05) * 0.05)
+    return np.linspace(lo, 1.0, int(round((1.0 - lo) / BIN_WIDTH)) + 1)
+
+
+def _hist(ax, rho, title, bins, color="tab:blue", ref=None):
+    def draw(r, **kw):
+        r = np.clip(r, bins[0], 1.0)  # the first bin also holds everything below it
+        ax.hist(r, bins=bins, weights=np.full(len(r), 100.0 / max(len(r), 1)), **kw)
+
     if ref is not None:
-        ax.hist(
-            ref,
-            bins=BINS,
-            weights=np.full(len(ref), 100.0 / max(len(ref), 1)),
-            histtype="step",
-            color="0.55",
-            lw=0.9,
-            label="bubblemesh §2",
-        )
-    ax.hist(rho, bins=BINS, weights=w, color=color, alpha=0.85, edgecolor="white", lw=0.3)
+        draw(ref, histtype="step", color="0.55", lw=0.9)
+    draw(rho, color=color, alpha=0.85, edgecolor="white", lw=0.3)
     ax.axvline(LOW, color="tab:red", lw=0.8, ls="--")
-    ax.set_xlim(0, 1)
-    ax.set_xlabel("radius ratio ρ", fontsize=8)
-    ax.set_ylabel("% of elements", fontsize=8)
+    ax.set_xlim(bins[0], 1.0)
     ax.tick_params(labelsize=7)
-    n_low = int((rho < LOW).sum())
-    ax.set_title(
-        f"{title}\nmean {rho.mean():.3f}, min {rho.min():.3f}, {n_low} < {LOW}", fontsize=8
-    )
+    n_low, n_under = int((rho < LOW).sum()), int((rho < bins[0]).sum())
+    if n_under:
+        ax.text(0.02, 0.96, f"{n_under} below {bins[0]:.2f} in the first bar", fontsize=7,
+                va="top", transform=ax.transAxes)  # fmt: skip
+    ax.set_title(f"{title}\nmean {rho.mean():.3f}, min {rho.min():.3f}, {n_low} < {LOW}",
+                 fontsize=8)  # fmt: skip
 
 
 def panels(path, title, delaunay, optimized, amplification):
@@ -128,8 +132,14 @@ def panels(path, title, delaunay, optimized, amplification):
         optimized["triangles"],
         "(d) Optimized node bubbles",
     )
-    _hist(ax[2, 0], delaunay["rho"], "(e) Mesh quality (Delaunay mesh)", color="tab:orange")
-    _hist(ax[2, 1], optimized["rho"], "(f) Mesh quality (Optimized mesh)", color="tab:green")
+    bins = rho_axis(delaunay["rho"], optimized["rho"])
+    for a, mesh, name, color in ((ax[2, 0], delaunay, "(e) Mesh quality (Delaunay mesh)",
+                                  "tab:orange"),
+                                 (ax[2, 1], optimized, "(f) Mesh quality (Optimized mesh)",
+                                  "tab:green")):  # fmt: skip
+        _hist(a, mesh["rho"], name, bins, color=color)
+        a.set_xlabel("radius ratio ρ", fontsize=8)
+        a.set_ylabel("% of elements", fontsize=8)
     fig.suptitle(title, fontsize=11)
     fig.tight_layout()
     _save(fig, path)
@@ -148,15 +158,17 @@ def histograms(path, title, results, labels, ref_key="bubblemesh_delaunay"):
     fig, axes = plt.subplots(
         rows, cols, figsize=(3.2 * cols, 2.9 * rows), sharex=True, sharey=True, squeeze=False
     )
+    bins = rho_axis(*results.values())
     ref = results.get(ref_key)
-    for ax, k in zip(axes.flat, keys, strict=False):
-        _hist(
-            ax,
-            results[k],
-            labels.get(k, k),
-            color="tab:green" if k.startswith("bubblemesh") else "tab:blue",
-            ref=None if k == ref_key else ref,
-        )
+    for i, (ax, k) in enumerate(zip(axes.flat, keys, strict=False)):
+        _hist(ax, results[k], labels.get(k, k), bins,
+              color="tab:green" if k.startswith("bubblemesh") else "tab:blue",
+              ref=None if k == ref_key else ref)  # fmt: skip
+        if i + cols >= len(keys):  # the lowest panel of its column: its x axis is labelled
+            ax.xaxis.set_tick_params(labelbottom=True)
+            ax.set_xlabel("radius ratio ρ", fontsize=8)
+        if i % cols == 0:
+            ax.set_ylabel("% of elements", fontsize=8)
     for ax in list(axes.flat)[len(keys) :]:
         ax.axis("off")
     fig.suptitle(
@@ -191,20 +203,29 @@ def meshes(path, title, results, labels):
     _save(fig, path)
 
 
-def benchmark(path, df):
-    """Log-log seconds vs elements per method (benchmark.csv rows with status ok)."""
-    fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
+def benchmark(path, df, labels):
+    """Log-log seconds and elements per second vs elements, a line per method (benchmark.csv
+    rows with status ok); a method's 1-thread run is dashed in its colour."""
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4.6))
+    colors = {}
     for method, g in df.groupby("method", sort=False):
         g = g.sort_values("elements")
-        ax[0].loglog(g["elements"], g["seconds"], "o-", ms=3, label=method)
-        ax[1].loglog(g["elements"], g["elements_per_s"], "o-", ms=3, label=method)
-    ax[0].set_xlabel("elements")
-    ax[0].set_ylabel("seconds (min of repeats)")
-    ax[1].set_xlabel("elements")
-    ax[1].set_ylabel("elements per second")
-    ax[0].grid(True, which="both", alpha=0.3)
-    ax[1].grid(True, which="both", alpha=0.3)
-    ax[0].legend(fontsize=8)
-    fig.suptitle("Unit disk, uniformly spaced boundary nodes", fontsize=10)
-    fig.tight_layout()
+        base = method.removesuffix("_1thread")
+        style = dict(marker="o", ms=3, label=labels.get(method, method),
+                     ls="--" if base != method else "-")
+        if base in colors:
+            style["color"] = colors[base]
+        (line,) = ax[0].loglog(g["elements"], g["seconds"], **style)
+        colors.setdefault(base, line.get_color())
+        ax[1].loglog(g["elements"], g["elements_per_s"], **{**style, "color": colors[base]})
+    for a, ylabel in zip(ax, ("seconds (minimum of the repeats)", "elements per second"),
+                         strict=True):  # fmt: skip
+        a.set_xlabel("elements")
+        a.set_ylabel(ylabel)
+        a.grid(True, which="both", alpha=0.3)
+    handles, names = ax[0].get_legend_handles_labels()
+    fig.legend(handles, names, loc="lower center", ncol=4, fontsize=8, frameon=False)
+    fig.suptitle("Unit disk, uniformly spaced boundary nodes: time (left) and throughput (right)",
+                 fontsize=10)
+    fig.tight_layout(rect=(0, 0.1, 1, 1))
     _save(fig, path)

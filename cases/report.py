@@ -67,13 +67,16 @@ def _n(count, word="element"):
     return f"{count} {word}" + ("" if count == 1 else "s")
 
 
-def findings(df, labels=None):
-    """Plain-language findings, (kind, sentence) with kind agree/disagree/info, from the data."""
+def findings(df, labels=None, case_labels=None):
+    """Plain-language findings, (kind, sentence) with kind agree/disagree/info, from the data.
+    ``labels`` / ``case_labels`` name the methods / cases (default: their keys)."""
     labels = labels or {}
     lab = lambda m: labels.get(m, m)  # noqa: E731
+    cl = lambda c: (case_labels or {}).get(c, c)  # noqa: E731
     out = []
-    for case in dict.fromkeys(df["case"]):
-        d, o = _get(df, case, "bubblemesh_delaunay"), _get(df, case, "bubblemesh_optimized")
+    for key in dict.fromkeys(df["case"]):
+        d, o = _get(df, key, "bubblemesh_delaunay"), _get(df, key, "bubblemesh_optimized")
+        case = cl(key)
         if d is None or o is None:
             msg = (
                 f"{case}: bubblemesh did not produce both meshes; the paper's result is unchecked."
@@ -100,7 +103,7 @@ def findings(df, labels=None):
             out.append(("disagree", base + ": no improvement, unlike the paper."))
         verb = "stays" if int(o.n_below_0_7) == 1 else "stay"
         low = f"{_n(o.n_below_0_7)} of the optimized mesh {verb} below 0.7 ({o.pct_below_0_7:.1f}%)"
-        if case in FEW_LOW:
+        if key in FEW_LOW:
             if o.n_below_0_7 == 0:
                 out.append(
                     (
@@ -113,7 +116,7 @@ def findings(df, labels=None):
                 out.append(("agree", f"{case}: {low}, the few the paper reports for this figure."))
             else:
                 out.append(("disagree", f"{case}: {low}, more than the paper's few."))
-        elif case in PAPER:
+        elif key in PAPER:
             kind = "agree" if o.pct_below_0_7 <= FEW_PCT else "disagree"
             out.append(
                 (
@@ -122,7 +125,7 @@ def findings(df, labels=None):
                     "elements, so it implies at most a few here.",
                 )
             )
-        g = _get(df, case, "gmsh_frontal")
+        g = _get(df, key, "gmsh_frontal")
         if g is not None:
             cmp_ = "higher" if o.rho_mean > g.rho_mean else "lower"
             out.append(
@@ -140,7 +143,7 @@ def findings(df, labels=None):
         out.append(
             (
                 "info",
-                f"{r.case}: {lab(r.method)} moved boundary nodes by up to "
+                f"{cl(r.case)}: {lab(r.method)} moved boundary nodes by up to "
                 f"{r.boundary_shift:.3g} ({r.boundary_nodes} boundary nodes in its mesh).",
             )
         )
@@ -156,7 +159,8 @@ def findings(df, labels=None):
         )
     for _, r in ok[ok["inverted"] > 0].iterrows():
         out.append(
-            ("info", f"{r.case}: {lab(r.method)} has {_n(r.inverted, 'inverted or flat element')}.")
+            ("info", f"{cl(r.case)}: {lab(r.method)} has "
+                     f"{_n(r.inverted, 'inverted or flat element')}.")
         )
     ref = ok[ok.method == "bubblemesh_delaunay"].set_index("case")["elements"]
     if not ref.empty:
@@ -195,7 +199,7 @@ def findings(df, labels=None):
         out.append(("info", f"Ranking by mean ρ (average rank over the cases): {by_mean}."))
         out.append(("info", f"Ranking by share of elements below 0.7 (average rank): {by_low}."))
     for _, r in df[df["status"] != "ok"].iterrows():
-        out.append(("info", f"{r.case}: {lab(r.method)} {r.status}: {r.reason}"))
+        out.append(("info", f"{cl(r.case)}: {lab(r.method)} {r.status}: {r.reason}"))
     return out
 
 
@@ -250,21 +254,6 @@ def _case_table(df, case, labels):
     return [h for _, h in TABLE_COLS], rows
 
 
-def _md_table(header, rows):
-    esc = lambda s: str(s).replace("|", "\\|")  # noqa: E731
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(esc(c) for c in row) + " |" for row in rows]
-    return "\n".join(lines)
-
-
-def _html_table(header, rows):
-    h = "".join(f"<th>{html.escape(c)}</th>" for c in header)
-    body = "".join(
-        "<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in row) + "</tr>" for row in rows
-    )
-    return f"<table><thead><tr>{h}</tr></thead><tbody>{body}</tbody></table>"
-
-
 def _rank_table(df, labels):
     rk = ranking(df)
     header = [
@@ -291,81 +280,143 @@ def _rank_table(df, labels):
     return header, rows
 
 
-def _benchmark(out: Path):
-    """(header, rows, png name, notes) of benchmark.csv / benchmark.json when present."""
+# --------------------------------------------------------------------------- benchmark
+
+BENCH_COLS = [  # benchmark.csv column, header; its "note" column is listed below the table
+    ("method", "method"),
+    ("elements", "elements"),
+    ("seconds", "seconds"),
+    ("elements_per_s", "elements/s"),
+    ("peak_mb", "peak memory, MB"),
+    ("peak_delta_mb", "MB above warm-up"),
+    ("ratio_to_triangle", "time per element ÷ Triangle's"),
+    ("boundary_nodes", "boundary nodes"),
+    ("repeats", "repeats"),
+    ("status", "status"),
+]
+
+
+def _bench_cell(key, v, labels):
     import pandas as pd
+
+    if v is None or (not isinstance(v, str) and pd.isna(v)):
+        return ""
+    if key == "method":
+        return labels.get(v, v)
+    if key in ("elements", "boundary_nodes", "repeats"):
+        return f"{int(v)}"
+    if key == "elements_per_s":
+        return f"{v:,.0f}"
+    if key in ("peak_mb", "peak_delta_mb"):
+        return f"{v:.1f}"
+    if key == "ratio_to_triangle":
+        return f"{v:.2f}"
+    if key == "seconds":
+        return f"{v:.4g}"
+    return str(v)
+
+
+def _benchmark(out: Path):
+    """The benchmark section's blocks from benchmark.csv / benchmark.json, [] when absent."""
+    import json
+
+    import pandas as pd
+
+    from cases.benchmark import LABELS
 
     csv = out / "benchmark.csv"
     if not csv.exists():
-        return None
-    b = pd.read_csv(csv)
-    header = list(b.columns)
-    rows = [
-        [("" if pd.isna(v) else (f"{v:.4g}" if isinstance(v, float) else str(v))) for v in r]
-        for r in b.values
-    ]
-    png = "figures/benchmark.png" if (out / "figures" / "benchmark.png").exists() else None
-    return header, rows, png, _benchmark_notes(out)
-
-
-def _benchmark_notes(out: Path) -> list[str]:
-    """Sentences from benchmark.json: when and where it ran, slopes, compile times, caps."""
-    import json
-
-    path = out / "benchmark.json"
-    if not path.exists():
         return []
-    m = json.loads(path.read_text())
+    b = pd.read_csv(csv)
+    path = out / "benchmark.json"
+    m = json.loads(path.read_text()) if path.exists() else {}
+    blocks = [("h2", "Speed benchmark"), ("p", _bench_command(m))]
+    if (out / "figures" / "benchmark.png").exists():
+        blocks.append(("img", "figures/benchmark.png", "benchmark: seconds and elements/s"))
+    cols = [(k, h) for k, h in BENCH_COLS if k in b.columns]
+    blocks.append(("table", [h for _, h in cols],
+                   [[_bench_cell(k, r[k], LABELS) for k, _ in cols] for _, r in b.iterrows()]))
+    targets = m.get("targets", [])
+    if targets:
+        blocks += [("h3", "Speed targets"), ("table", ["target", "measured", "met"], [
+            [t["target"], f"{t['measured']} {t['unit']}".strip(), "yes" if t["met"] else "NO"]
+            for t in targets])]  # fmt: skip
+    trade = [r for r in m.get("iterations_tradeoff", []) if "seconds" in r]
+    if trade:
+        blocks += [
+            ("h3", f"§3 iterations against time and quality ({trade[0]['elements']} elements, "
+                   "generate + optimize; the default is 200)"),
+            ("table", ["iterations", "seconds", "× Gmsh's speed", "mean ρ", "min ρ", "% < 0.7"], [
+                [str(r["iterations"]), f"{r['seconds']:.3g}",
+                 f"{r['speedup_vs_gmsh']:.2f}" if "speedup_vs_gmsh" in r else "",
+                 f"{r['rho_mean']:.4f}", f"{r['rho_min']:.3f}", f"{r['pct_below_0_7']:.2f}"]
+                for r in trade]),
+        ]  # fmt: skip
+    blocks += [("h3", "How the benchmark ran"), ("ul", _benchmark_notes(m, LABELS))]
+    noted = b[b["note"].notna() & (b["note"] != "")] if "note" in b else b.iloc[:0]
+    if len(noted):
+        blocks += [("h3", "Notes on the rows"), ("table", ["method", "elements", "note"], [
+            [LABELS.get(r.method, r.method), _bench_cell("elements", r.elements, LABELS), r.note]
+            for r in noted.itertuples()])]  # fmt: skip
+    return blocks
+
+
+def _bench_command(m: dict) -> str:
+    """The command that regenerates the benchmark as it was run."""
+    if m.get("quick"):
+        args = " --quick"
+    else:
+        size, repeats = max(m.get("sizes") or [0]), m.get("repeats")
+        args = (f" --max-elements {size}" if size else "") + (
+            f" --repeats {repeats}" if repeats else "")
+    return (f"Regenerate with `bubblemesh bench{args} --out reports/` (a fresh process per "
+            "method and size; it rewrites this report too).")
+
+
+def _benchmark_notes(m: dict, labels) -> list[str]:
+    """Sentences from benchmark.json: when and where it ran, slopes, compile times, caps."""
+    from cases.benchmark import phase_name
+
+    if not m:
+        return []
     notes = [
         f"Run {m.get('date')} on {m.get('platform')}, {m.get('cpu')}, {m.get('cpu_count')} CPUs"
         + (" (quick mode)" if m.get("quick") else "")
         + f"; minimum of {m.get('repeats')} repeats after a warm-up; "
         f"{m.get('total_seconds', float('nan')):.0f} s in all; 1-minute load average "
         f"{m.get('load_average_start_end')} at start/end (other jobs share the machine).",
-        f"Memory: {m.get('memory')}.",
+        "Memory is the peak resident set size of a fresh process per method and size, "
+        "interpreter and libraries included; the column beside it is the part above that "
+        "process's size after its warm-up.",
+        f"The disk's boundary has n uniformly spaced nodes, n = √(elements / "
+        f"{m.get('c_disk', float('nan'))}) (bubblemesh's §2 element count on it); Triangle and "
+        "Gmsh are tuned, untimed, to bubblemesh's element count.",
         f"Gmsh Frontal-Delaunay is run only up to {m.get('gmsh_cap')} elements (far slower); "
         "the rows above that say skipped.",
     ]
-    slopes = m.get("loglog_slopes", {})
+    slopes = ", ".join(f"{labels.get(k, k)} {v:.3f}"
+                       for k, v in m.get("loglog_slopes", {}).items() if v == v)
     if slopes:
-        s = ", ".join(f"{k} {v:.3f}" for k, v in slopes.items() if v == v)
-        if s:
-            notes.append(
-                f"Fitted log-log slope of seconds vs elements (sizes >= "
-                f"{m.get('slope_from_elements')} elements): {s}."
-            )
-    if m.get("threads"):
-        notes.append(f"numba threading in the children: {m['threads']}.")
-    trade = [r for r in m.get("iterations_tradeoff", []) if "seconds" in r]
-    if trade:
-        parts = "; ".join(
-            f"{r['iterations']}: {r['seconds']:.3g} s"
-            + (f" ({r['speedup_vs_gmsh']:.2f}x Gmsh's speed)" if "speedup_vs_gmsh" in r else "")
-            + f", mean ρ {r['rho_mean']:.4f}, min {r['rho_min']:.3f}, "
-            f"{r['pct_below_0_7']:.2f}% < 0.7"
-            for r in trade)
-        notes.append(f"§3 iterations vs time and quality, generate + optimize at "
-                     f"{trade[0]['elements']} elements (the default is 200): {parts}.")
+        notes.append(f"Fitted log-log slope of seconds against elements (sizes ≥ "
+                     f"{m.get('slope_from_elements')} elements; 1 is linear): {slopes}.")
+    t = m.get("threads", {})
+    if "layer" in t:
+        notes.append(f"numba ran with its {t['layer']} threading layer and {t['numba_threads']} "
+                     "threads (the 1-thread rows with one).")
     for method, p in m.get("profile", {}).items():
         total = sum(p["phases"].values())
-        parts = ", ".join(f"{k} {v:.3g} s ({100 * v / total:.0f}%)"
+        parts = ", ".join(f"{phase_name(k)} {v:.3g} s ({100 * v / total:.0f}%)"
                           for k, v in p["phases"].items())
-        notes.append(f"Where the time goes, {method} at {p['elements']} elements: {parts}.")
-    for t in m.get("targets", []):
-        notes.append(
-            f"Issue-6 target {'met' if t['met'] else 'MISSED'}: {t['target']} "
-            f"(measured {t['measured']} {t['unit']}).".replace(" )", ")")
-        )
+        notes.append(f"Where the time goes, {labels.get(method, method)} at {p['elements']} "
+                     f"elements: {parts}.")
     c = m.get("compile", {})
     if "cold_first_call_s" in c:
         notes.append(
-            f"numba: first generate+optimize in a fresh process takes "
-            f"{c['cold_first_call_s']:.1f} s with an empty cache (compile) and "
+            f"numba: the first generate + optimize in a fresh process takes "
+            f"{c['cold_first_call_s']:.1f} s with an empty cache (compiling the kernels) and "
             f"{c.get('warm_first_call_s', float('nan')):.2f} s with the cache filled "
             f"(import {c.get('warm_import_s', float('nan')):.2f} s)."
         )
-    elif c:
-        notes.append(f"numba compile time: {c}.")
     return notes
 
 
@@ -373,156 +424,150 @@ def _benchmark_notes(out: Path) -> list[str]:
 
 METHOD_NOTES = [
     "**bubblemesh §2** is `bubblemesh.generate` (the paper's Delaunay mesh); **§2+§3** is "
-    "`bubblemesh.optimize` on it with the paper's defaults (amplification 1.7, 3 rings, α = 0.1); "
-    "its time is "
-    "generate + optimize.",
+    "`bubblemesh.optimize` on it with the paper's defaults (amplification 1.7, 3 rings, "
+    "α = 0.1); its time is generate + optimize.",
     "**Triangle** is `triangulate(..., 'pq30a<A>YQ')`: `Y` forbids new boundary nodes; the area "
-    "bound A starts "
-    "at domain area / §2 element count and is corrected (A *= count/target, 3 runs, the closest "
-    "kept).",
+    "bound A starts at domain area / §2 element count and is corrected (A ← A·count/target, "
+    "3 runs, the closest kept).",
     "**Gmsh** meshes a geometry whose points are the boundary nodes and whose lines are "
     "transfinite with 2 nodes (no node added on the boundary). Gmsh's size factor does not reach "
     "the interior then, so the interior size is a factor times the reciprocal-distance mean, over "
     "the loops, of the size at each loop's nearest node (node size: mean of its two segments; a "
     "Python size callback, counted in the time); the factor is tuned to the §2 element count.",
     "**pymeshlab isotropic remesh** runs `meshing_isotropic_explicit_remeshing` on the §2 mesh "
-    "with an absolute "
-    "target edge length tuned to the §2 element count. The filter has no boundary lock (on the "
-    "whole mesh it "
-    "splits and collapses boundary edges), so it runs with `selectedonly` on the faces that own "
-    "no boundary edge: "
-    "the boundary nodes and the §2 mesh's boundary strip of faces are kept as they were. "
-    "**boundary free** is the "
-    "same filter on the whole mesh, for reference; its boundary shift and boundary-node count "
-    "show what it changed.",
+    "with an absolute target edge length tuned to the §2 element count. The filter has no "
+    "boundary lock (on the whole mesh it splits and collapses boundary edges), so it runs with "
+    "`selectedonly` on the faces that own no boundary edge: the boundary nodes and the §2 mesh's "
+    "boundary strip of faces are kept as they were. **boundary free** is the same filter on the "
+    "whole mesh, for reference; its boundary shift and boundary-node count show what it changed.",
     "**Laplacian** smoothing moves the §2 mesh's interior nodes, boundary fixed, same "
-    "connectivity: pymeshlab's "
-    "`apply_coord_laplacian_smoothing` (uniform weights, only interior vertices selected) and a "
-    "plain numpy/scipy "
-    "mean-of-neighbours variant. pymeshlab's update keeps a self weight: x ← (x + 2Σ "
-    "neighbours)/(2·deg + 1).",
+    "connectivity: pymeshlab's `apply_coord_laplacian_smoothing` (uniform weights, only interior "
+    "vertices selected) and a plain numpy/scipy mean-of-neighbours variant. pymeshlab's update "
+    "keeps a self weight: x ← (x + 2Σ neighbours)/(2·deg + 1).",
     "Post-processor times exclude building their §2 input; every generator's time is its last "
-    "tuning run. "
-    "Times are wall-clock on a shared machine: compare orders of magnitude only. The issue-6 "
-    "benchmark "
-    "measures speed properly.",
+    "tuning run. Times are wall-clock on a shared machine: compare orders of magnitude only; "
+    "the speed benchmark measures speed properly.",
 ]
 
 
 def _inline_html(text):
-    """The two markdown marks METHOD_NOTES use (**bold**, `code`) as HTML."""
+    """The markdown marks the report uses (**bold**, `code`, [text](link)) as HTML."""
     import re
 
-    t = html.escape(text)
+    t = html.escape(text, quote=False)
     t = re.sub(r"[*][*]([^*]*)[*][*]", r"<b>\1</b>", t)
-    return re.sub(r"`([^`]*)`", r"<code>\1</code>", t)
+    t = re.sub(r"`([^`]*)`", r"<code>\1</code>", t)
+    return re.sub(r"\[([^\]]*)\]\(([^)]*)\)", r"<a href='\2'>\1</a>", t)
 
 
-def write(out: Path, df, figs, meta, case_mods, labels):
-    out = Path(out)
-    f = findings(df, labels)
-    v = meta["versions"]
-    versions = ", ".join(f"{k} {val}" for k, val in v.items())
-    machine = f"{meta['platform']}; {meta['cpu']}; {meta['cpu_count']} CPUs"
-    bench = _benchmark(out)
-    warm = meta.get("warm_up_seconds")
-    run_line = (
-        f"Generated {meta['date']} in {meta['total_seconds']:.1f} s"
-        + (
-            f" (of which {warm:.1f} s bubblemesh warm-up incl. JIT compile)"
-            if warm is not None
-            else ""
-        )
-        + f". Quality numbers: {meta['quality_source']}."
-    )
+def _markdown(blocks) -> str:
+    out = []
+    for kind, *a in blocks:
+        if kind in ("h1", "h2", "h3"):
+            out.append("#" * int(kind[1]) + " " + a[0])
+        elif kind == "p":
+            out.append(a[0])
+        elif kind == "em":
+            out.append(f"*{a[0]}*")
+        elif kind == "img":
+            out.append(f"![{a[1]}]({a[0]})")
+        elif kind == "ul":
+            out.append("\n".join(f"- {item if isinstance(item, str) else item[1]}"
+                                 for item in a[0]))
+        elif kind == "table":
+            esc = lambda c: str(c).replace("|", "\\|")  # noqa: E731
+            lines = ["| " + " | ".join(map(esc, a[0])) + " |", "|" + "---|" * len(a[0])]
+            out.append("\n".join(lines + ["| " + " | ".join(map(esc, r)) + " |" for r in a[1]]))
+    return "\n\n".join(out) + "\n"
 
-    # ---------------- markdown
-    md = [
-        "# bubblemesh: reproduction of the paper's Figs. 3–6",
-        "",
-        "Regenerate with `python -m cases.reproduce --out reports` (or `bubblemesh reproduce`). "
-        "Numbers: [quality.csv](quality.csv); meshes: `meshes/*.vtu` (cell data `radius_ratio`).",
-        "",
-        run_line,
-        "",
-    ]
-    if meta.get("bubblemesh_status") != "ok":
-        md += [
-            f"> **bubblemesh was not available** ({meta['bubblemesh_status']}): its rows are "
-            "skipped and the "
-            f"post-processors ran on a stand-in mesh. This report only proves the pipeline.",
-            "",
-        ]
-    md += ["## Findings (computed from the numbers below)", ""]
-    md += [
-        f"- **{'agrees' if k == 'agree' else 'differs' if k == 'disagree' else 'note'}**: {s}"
-        for k, s in f
-    ]
-    md += ["", "## Ranking over all cases", ""]
-    md += [_md_table(*_rank_table(df, labels)), ""]
-    for name, mod in case_mods.items():
-        md += [f"## {getattr(mod, 'TITLE', name)}", "", f"*{PAPER.get(name, '')}*", ""]
-        for key in ("panels", "histograms", "meshes"):
-            if key in figs.get(name, {}):
-                md += [f"![{name} {key}](figures/{figs[name][key].name})", ""]
-        md += [_md_table(*_case_table(df, name, labels)), ""]
-    if bench:
-        md += ["## Speed benchmark (issue 6)", ""]
-        if bench[2]:
-            md += [f"![benchmark]({bench[2]})", ""]
-        md += [_md_table(bench[0], bench[1]), ""] + [f"- {n}" for n in bench[3]] + [""]
-    md += ["## How each method was run", ""] + [f"- {n}" for n in METHOD_NOTES]
-    md += [f"- Laplacian steps: {meta['laplacian_steps']}.", ""]
-    md += ["## Environment", "", f"- Machine: {machine}", f"- Software: {versions}", ""]
-    for n in meta.get("notes", []):
-        md += [f"- {n}"]
-    (out / "README.md").write_text("\n".join(md) + "\n", encoding="utf-8")
 
-    # ---------------- html
-    e = html.escape
+def _html(blocks, title) -> str:
     css = (
         "body{font-family:system-ui,sans-serif;max-width:1200px;margin:auto;padding:1em;color:#222}"
         "table{border-collapse:collapse;font-size:13px;margin:0.5em 0 1.5em}"
         "td,th{border:1px solid #ccc;padding:3px 6px;text-align:right}td:first-child,th:first-child"
         "{text-align:left}img{max-width:100%}li.agree{color:#135}li.disagree{color:#a40}"
-        ".warn{background:#fee;padding:0.5em;border:1px solid #c66}"
     )
-    h = [
-        f"<!doctype html><html><head><meta charset='utf-8'><title>bubblemesh reproduction</title>"
-        f"<style>{css}</style></head><body>",
-        "<h1>bubblemesh: reproduction of the paper's Figs. 3–6</h1>",
-        f"<p>Regenerate with <code>python -m cases.reproduce --out reports</code>. Numbers: "
-        "<a href='quality.csv'>quality.csv</a>; meshes: "
-        f"<code>meshes/*.vtu</code>.</p><p>{e(run_line)}</p>",
-    ]
-    if meta.get("bubblemesh_status") != "ok":
-        h.append(
-            f"<p class='warn'>bubblemesh was not available ({e(meta['bubblemesh_status'])}): its "
-            "rows are "
-            f"skipped and the post-processors ran on a stand-in mesh.</p>"
-        )
-    h.append("<h2>Findings (computed from the numbers)</h2><ul>")
+    out = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}"
+           f"</title><style>{css}</style></head><body>"]
+    for kind, *a in blocks:
+        if kind in ("h1", "h2", "h3"):
+            out.append(f"<{kind}>{_inline_html(a[0])}</{kind}>")
+        elif kind == "p":
+            out.append(f"<p>{_inline_html(a[0])}</p>")
+        elif kind == "em":
+            out.append(f"<p><i>{html.escape(a[0])}</i></p>")
+        elif kind == "img":
+            out.append(f"<p><img src='{a[0]}' alt='{html.escape(a[1])}'></p>")
+        elif kind == "ul":
+            items = [(None, i) if isinstance(i, str) else i for i in a[0]]
+            out.append("<ul>" + "".join(
+                (f"<li class='{c}'>" if c else "<li>") + _inline_html(t) + "</li>"
+                for c, t in items) + "</ul>")  # fmt: skip
+        elif kind == "table":
+            head = "".join(f"<th>{html.escape(c)}</th>" for c in a[0])
+            body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r)
+                           + "</tr>" for r in a[1])  # fmt: skip
+            out.append(f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")
+    return "\n".join(out + ["</body></html>"]) + "\n"
+
+
+def _short(mod) -> str:
+    """'Fig. 3' from a case TITLE 'Fig. 3: ...' (the case's name when it has no such title)."""
+    return getattr(mod, "TITLE", mod.NAME).split(":")[0]
+
+
+def _reproduce_command(names, all_cases) -> str:
+    only = "" if list(names) == list(all_cases) else "".join(f" --case {n}" for n in names)
+    return f"bubblemesh reproduce{only} --out reports/"
+
+
+def write(out: Path, df, figs, meta, case_mods, labels):
+    """README.md and index.html in ``out``, from the rows, figures and run metadata."""
+    import cases as _cases
+
+    out = Path(out)
+    case_labels = {n: _short(m) for n, m in case_mods.items()}
     word = {"agree": "agrees", "disagree": "differs"}
-    h += [f"<li class='{k}'><b>{word.get(k, 'note')}</b>: {e(s)}</li>" for k, s in f]
-    h.append("</ul><h2>Ranking over all cases</h2>" + _html_table(*_rank_table(df, labels)))
+    warm = meta.get("warm_up_seconds")
+    blocks = [
+        ("h1", "bubblemesh: the paper's Figs. 3–6 reproduced and compared"),
+        ("p", "The paper “Automatic Delaunay mesh generation method and physically-based mesh "
+              "optimization method on two-dimensional regions” meshes four regions (its Figs. "
+              "3–6) in two stages: a Delaunay mesh whose node spacing is set by node and element "
+              "bubbles (§2), then an optimisation that moves the interior nodes by forces "
+              "between their bubbles and re-triangulates (§3). bubblemesh implements both. "
+              "Here it meshes the same four regions, and other meshers and smoothers mesh them "
+              "on the same boundary nodes with about the same element count."),
+        ("p", "Quality is the radius ratio ρ = 2r/R of the paper's eq. 10 (r the inradius, R "
+              "the circumradius): 1 for an equilateral triangle, towards 0 as a triangle "
+              "flattens. The paper counts elements below ρ = 0.7 as low quality. For each "
+              "region: the paper's six panels, the ρ histogram of every method, every mesh "
+              "with its elements below 0.7 in red, and the numbers."),
+        ("p", f"Regenerate with `{_reproduce_command(case_mods, _cases.ALL)}`. Numbers: "
+              "[quality.csv](quality.csv); every mesh: `meshes/*.vtu` (cell data "
+              "`radius_ratio`)."),
+        ("p", f"Generated {meta['date']} in {meta['total_seconds']:.1f} s"
+              + (f", {warm:.1f} s of it loading or compiling the numba kernels" if warm else "")
+              + "."),
+        ("h2", "Findings (computed from the numbers below)"),
+        ("ul", [(k, f"**{word.get(k, 'note')}**: {s}")
+                for k, s in findings(df, labels, case_labels)]),
+        ("h2", "Ranking over all cases"),
+        ("table", *_rank_table(df, labels)),
+    ]
     for name, mod in case_mods.items():
-        h.append(f"<h2>{e(getattr(mod, 'TITLE', name))}</h2><p><i>{e(PAPER.get(name, ''))}</i></p>")
-        for key in ("panels", "histograms", "meshes"):
-            if key in figs.get(name, {}):
-                h.append(f"<p><img src='figures/{figs[name][key].name}' alt='{name} {key}'></p>")
-        h.append(_html_table(*_case_table(df, name, labels)))
-    if bench:
-        h.append("<h2>Speed benchmark (issue 6)</h2>")
-        if bench[2]:
-            h.append(f"<p><img src='{bench[2]}' alt='benchmark'></p>")
-        h.append(_html_table(bench[0], bench[1]))
-        h.append("<ul>" + "".join(f"<li>{e(n)}</li>" for n in bench[3]) + "</ul>")
-    h.append("<h2>How each method was run</h2><ul>")
-    h += [f"<li>{_inline_html(n)}</li>" for n in METHOD_NOTES]
-    h.append(f"<li>Laplacian steps: {meta['laplacian_steps']}.</li></ul>")
-    h.append(
-        f"<h2>Environment</h2><ul><li>Machine: {e(machine)}</li><li>Software: {e(versions)}</li>"
-    )
-    h += [f"<li>{e(n)}</li>" for n in meta.get("notes", [])]
-    h.append("</ul></body></html>")
-    (out / "index.html").write_text("\n".join(h) + "\n", encoding="utf-8")
+        blocks += [("h2", getattr(mod, "TITLE", name)), ("em", PAPER.get(name, ""))]
+        blocks += [("img", f"figures/{figs[name][key].name}", f"{case_labels[name]} {key}")
+                   for key in ("panels", "histograms", "meshes") if key in figs.get(name, {})]
+        blocks.append(("table", *_case_table(df, name, labels)))
+    blocks += _benchmark(out)
+    blocks += [("h2", "How each method was run"),
+               ("ul", METHOD_NOTES + [f"Laplacian steps: {meta['laplacian_steps']}."])]
+    v = meta["versions"]
+    blocks += [("h2", "Environment"), ("ul", [
+        f"Machine: {meta['platform']}; {meta['cpu']}; {meta['cpu_count']} CPUs",
+        "Software: " + ", ".join(f"{k} {val}" for k, val in v.items()),
+    ])]  # fmt: skip
+    (out / "README.md").write_text(_markdown(blocks), encoding="utf-8")
+    (out / "index.html").write_text(_html(blocks, "bubblemesh reproduction"), encoding="utf-8")

@@ -1,11 +1,11 @@
-"""The case studies (issue 5) and the benchmark harness (issue 6).
+"""The case studies of the paper's Figs. 3-6 and the speed benchmark harness.
 
-Geometry: each case is the domain issue 5 specifies (node counts, spacing,
-nodes on the exact curves, areas against closed forms and shapely, holes inside
-the outer loop).  Peers: same boundary nodes, element count matched, a missing
+Geometry: each case is the domain of its figure (node counts, spacing, nodes
+on the exact curves, areas against closed forms and shapely, holes inside the
+outer loop).  Peers: same boundary nodes, element count matched, a missing
 peer is skipped.  Pipeline: ``reproduce.main`` on one case writes the CSV and
 every number in it is recomputed here from the written VTU files with formulas
-independent of both ``bubblemesh.quality`` and ``cases.metrics``.
+independent of ``bubblemesh.quality``.
 """
 
 from __future__ import annotations
@@ -190,9 +190,9 @@ def test_independent_formulas_agree_on_known_triangles():
     rho = _rho_independent(p, t)
     assert rho[0] == pytest.approx(1.0, abs=1e-14)
     assert rho[1] == pytest.approx(2 * (math.sqrt(2) - 1), abs=1e-14)  # right isosceles: 2(√2−1)
-    from cases import metrics
+    from bubblemesh.quality import radius_ratio
 
-    np.testing.assert_allclose(metrics.radius_ratio(p, t), rho, atol=1e-14)
+    np.testing.assert_allclose(radius_ratio(p, t), rho, atol=1e-14)
     np.testing.assert_allclose(np.sort(_angles_independent(p, t)[1]), [45, 45, 90], atol=1e-12)
 
 
@@ -203,14 +203,14 @@ def test_independent_formulas_agree_on_known_triangles():
 @pytest.mark.parametrize("name", ["triangle", "gmsh_frontal", "gmsh_delaunay"])
 def test_generators_keep_the_boundary_nodes_and_match_the_count(name):
     pytest.importorskip({"triangle": "triangle"}.get(name, "gmsh"))
-    from cases import metrics, peers
+    from cases import peers
 
     loops = cases.get("fig4_square_hole").loops()
     p, t, sec, info = peers.run_peer(name, loops, 1300)
     assert info["status"] == "ok", info
     assert sec >= 0 and abs(len(t) / 1300 - 1) < 0.1, info["runs"]
     boundary = np.vstack(loops)
-    shift, nb = metrics.boundary_shift(boundary, p, t)
+    shift, nb = peers.boundary_shift(boundary, p, t)
     assert shift == 0.0 and nb == len(boundary)
     assert info["boundary_shift"] == 0.0 and info["inverted"] == 0
     e1, e2 = p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]]
@@ -229,6 +229,31 @@ def test_triangle_area_bound_is_written_without_exponent():
     # Triangle's parser stops at 'e': a bound written 3.1e-05 would give a coarse mesh
     p, t, _, info = peers.run_peer("triangle", [circle((0, 0), 1.0, 738)], 100_000)
     assert abs(len(t) / 100_000 - 1) < 0.1, info["runs"]
+
+
+@pytest.mark.peers
+def test_a_tuned_run_repeats_with_its_parameter():
+    """The benchmark tunes a peer once, then times runs at the tuned parameter: Triangle must
+    give the tuned mesh again; Gmsh (whose mesh depends on the runs before it in a session)
+    the same mesh on every fresh run, of about the tuned size."""
+    pytest.importorskip("triangle")
+    pytest.importorskip("gmsh")
+    from cases import peers
+
+    loops = cases.get("fig3_circle").loops()
+    p, t, _, info = peers._triangle(loops, 900)
+    assert len(info["runs"]) > 1  # really tuned: 900 is not the first run's count
+    p1, t1, _, _ = peers._triangle(loops, 900, area=info["parameter"], tuning_runs=1)
+    np.testing.assert_array_equal(t1, t)
+    np.testing.assert_array_equal(p1, p)
+
+    _, t, _, info = peers._gmsh(loops, 900, 6, uniform=True)
+    assert len(info["runs"]) > 1
+    again = [peers._gmsh(loops, 900, 6, uniform=True, factor=info["parameter"], tuning_runs=1)
+             for _ in range(2)]  # fmt: skip
+    np.testing.assert_array_equal(again[0][1], again[1][1])
+    np.testing.assert_array_equal(again[0][0], again[1][0])
+    assert abs(len(again[0][1]) / len(t) - 1) < 0.02
 
 
 def _base_mesh(loops):
@@ -370,6 +395,9 @@ def test_reproduce_one_case_numbers_match_the_written_meshes(tmp_path):
     html = (tmp_path / "index.html").read_text()
     assert "fig3_circle_histograms.png" in html and "Findings" in html
     readme = (tmp_path / "README.md").read_text()
+    assert "`bubblemesh reproduce --case fig3_circle --out reports/`" in readme
+    for word in ("issue", "not available", "stand-in", "fig3_circle:"):  # no internal labels
+        assert word not in readme.lower(), word
     assert reproduce.rewrite_report(tmp_path)  # from the written files alone: the same report
     assert (tmp_path / "README.md").read_text() == readme
 
@@ -430,6 +458,21 @@ def test_benchmark_quick_mode_runs(tmp_path):
         np.testing.assert_allclose(tri.ratio_to_triangle, 1.0)
 
 
+def test_histogram_range_starts_below_the_lowest_first_percentile():
+    pytest.importorskip("matplotlib")
+    from cases import plots
+
+    rng = np.random.default_rng(7)
+    good, poor = 1 - 0.1 * rng.random(1000), 0.3 + 0.7 * rng.random(1000)
+    bins = plots.rho_axis(good, poor)
+    low = min(np.percentile(good, 1), np.percentile(poor, 1))  # about 0.307
+    assert bins[0] <= low < bins[0] + 0.05 and bins[-1] == 1.0
+    assert math.isclose(bins[0] / 0.05, round(bins[0] / 0.05), abs_tol=1e-9)
+    np.testing.assert_allclose(np.diff(bins), plots.BIN_WIDTH)
+    # all good: the range still reaches below 0.7, so the ρ = 0.7 line is in view
+    assert plots.rho_axis(good)[0] <= 0.6
+
+
 def test_boundary_nodes_for_calibration():
     from cases import benchmark
 
@@ -437,7 +480,7 @@ def test_boundary_nodes_for_calibration():
     assert benchmark.boundary_nodes_for(10) == 12
 
 
-def test_issue6_targets_are_judged_from_the_rows():
+def test_speed_targets_are_judged_from_the_rows():
     pd = pytest.importorskip("pandas")
     from cases import benchmark
 
