@@ -74,7 +74,8 @@ def _check_fits(area_geo: float, radii: np.ndarray) -> None:
 def _insertion_bound(domain_area, radii):
     """The a-priori bound on insertions (module docstring)."""
     r_min = float(radii.min())
-    return int(math.ceil(domain_area / (2.0 * math.pi * r_min * r_min))) + 1
+    bound = domain_area / (2.0 * math.pi * r_min * r_min)
+    return int(math.ceil(min(bound, 2.0**62))) + 1  # no run gets near; the kernel's int64
 
 
 def generate(domain, *, max_insertions=None, progress=False):
