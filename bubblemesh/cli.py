@@ -6,57 +6,162 @@ physically-based optimisation (§3), then reports the radius ratio of eq. 10.
 ``bubblemesh reproduce`` rebuilds the paper's Figs. 3-6 and the comparison
 with other meshers, ``bubblemesh bench`` times them; both live in the
 repository's ``cases`` package, imported only when asked for.
+
+Every error is reported as one line on stderr, ``bubblemesh COMMAND: error:
+...``, and the exit status says which kind it was (``EXIT_STATUS`` below, also
+in ``--help``).  The output paths of ``mesh`` are checked before meshing
+starts, so a bad ``-o`` or ``--plot`` fails at once.  With ``--debug`` an
+unexpected exception (a bug) shows its traceback instead of one line.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
+from typing import NoReturn
 
-from bubblemesh.errors import GeometryError, MeshingError
+from bubblemesh.errors import MeshingError
 
-__all__ = ["main"]
+__all__ = ["EXIT_STATUS", "main"]
+
+EXIT_STATUS = """\
+exit status:
+  0    success
+  1    meshing failed (MeshingError), a file could not be written, a package
+       the command needs is missing, or an unexpected error (a bug)
+  2    usage or bad input: unknown options or values, an input file that is
+       not a valid .poly boundary, an output path whose format or folder will
+       not do, an unknown case
+  130  interrupted"""
+
+
+DEBUG_HELP = "show the traceback of an unexpected error (a bug) instead of one line"
 
 
 class CommandError(Exception):
     """Something the command needs is missing (an optional package, the cases)."""
 
+    status = 1
+
+
+class UsageError(CommandError):
+    """An option value the command cannot use (reported with exit status 2)."""
+
+    status = 2
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with its errors on one line: no usage block before them."""
+
+    def error(self, message: str, prog: str | None = None) -> NoReturn:
+        prog = prog or self.prog
+        self.exit(2, f"{prog}: error: {_one_line(message)} (see {prog} --help)\n")
+
+    def parse_args(self, args=None, namespace=None):
+        """As argparse, but an unknown option is blamed on the command it was given to."""
+        parsed, extra = self.parse_known_args(args, namespace)
+        if extra:
+            command = getattr(parsed, "command", None)
+            prog = f"{self.prog} {command}" if command else self.prog
+            self.error(f"unrecognized arguments: {' '.join(extra)}", prog)
+        return parsed
+
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit status."""
-    parser = _parser()
-    args = parser.parse_args(argv)
+    """Run the command line; returns the exit status (see ``EXIT_STATUS``)."""
     try:
-        return args.run(args)
-    except (GeometryError, MeshingError, CommandError, OSError) as error:
-        print(f"bubblemesh {args.command}: error: {error}", file=sys.stderr)
+        args = _parser().parse_args(argv)
+    except SystemExit as done:  # --help, --version, or a usage error already reported
+        return done.code if isinstance(done.code, int) else int(done.code is not None)
+    prefix = f"bubblemesh {args.command}"
+    with warnings.catch_warnings():
+        warnings.showwarning = _one_line_warning(prefix)
+        try:
+            return args.run(args)
+        except KeyboardInterrupt:
+            _report(prefix, "interrupted")
+            return 130
+        except Exception as error:
+            status = _status(error)
+            if status is None and args.debug:
+                raise
+            name, message = type(error).__name__, _one_line(str(error))
+            if status is None:
+                status = 1
+                said = f": {message}" if message else ""
+                message = f"unexpected {name}{said} (--debug shows where)"
+            _report(prefix, message or name)
+            return status
+
+
+def _status(error: Exception) -> int | None:
+    """The exit status of an expected error; None for an unexpected one."""
+    if isinstance(error, CommandError):
+        return error.status
+    if isinstance(error, ValueError):  # GeometryError, MeshFileError, parameter checks
+        return 2
+    if isinstance(error, (MeshingError, OSError, ImportError)):
         return 1
+    return None
+
+
+def _report(prefix: str, message: str) -> None:
+    print(f"{prefix}: error: {message}", file=sys.stderr)
+
+
+def _one_line(text: str) -> str:
+    return " ".join(part.strip() for part in text.splitlines() if part.strip())
+
+
+def _one_line_warning(prefix: str):
+    def show(message, category, filename, lineno, file=None, line=None):
+        where = f"{Path(filename).name}:{lineno}"
+        text = _one_line(str(message))
+        print(f"{prefix}: warning: {text} ({category.__name__}, {where})", file=sys.stderr)
+
+    return show
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="bubblemesh",
         description="Delaunay meshing with node/element bubbles and bubble-force optimisation.",
+        epilog=EXIT_STATUS,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
+    parser.add_argument("--debug", action="store_true", help=DEBUG_HELP)
+    # on the commands too; SUPPRESS keeps a top-level --debug from being reset to False
+    debug = _Parser(add_help=False)
+    debug.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=DEBUG_HELP)
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    mesh = commands.add_parser("mesh", help="mesh a Triangle .poly boundary")
+    def command(name: str, help: str) -> argparse.ArgumentParser:
+        return commands.add_parser(
+            name,
+            help=help,
+            parents=[debug],
+            epilog=EXIT_STATUS,
+            formatter_class=argparse.RawDescriptionHelpFormatter,
+        )
+
+    mesh = command("mesh", "mesh a Triangle .poly boundary")
     mesh.add_argument("input", type=Path, metavar="INPUT", help="boundary as a .poly file")
     mesh.add_argument(
         "-o", "--output", type=Path, required=True, metavar="OUT",
-        help="mesh file; the suffix picks the format (.vtu, .msh, .xdmf, ...)",
+        help="mesh file; the suffix picks the format (.vtu, .msh, .xdmf, ...; meshio's)",
     )  # fmt: skip
     mesh.add_argument("--no-optimize", action="store_true", help="stop after generation (paper §2)")
-    mesh.add_argument("--plot", type=Path, metavar="PNG", help="also draw the mesh to PNG")
+    mesh.add_argument("--plot", type=Path, metavar="PNG", help="also draw the mesh (.png, .pdf)")
     mesh.add_argument(
-        "--max-insertions", type=int, metavar="K", help="stop generation after K node insertions"
+        "--max-insertions", type=_whole(0), metavar="K", help="stop generation after K insertions"
     )
     mesh.set_defaults(run=_run_mesh)
 
-    reproduce = commands.add_parser("reproduce", help="rebuild the paper's cases and the report")
+    reproduce = command("reproduce", "rebuild the paper's cases and the report")
     reproduce.add_argument(
         "--case", action="append", dest="cases", metavar="NAME",
         help="only this case (repeatable); default all",
@@ -64,13 +169,29 @@ def _parser() -> argparse.ArgumentParser:
     reproduce.add_argument("--out", type=Path, default=Path("reports"), help="report folder")
     reproduce.set_defaults(run=_run_reproduce)
 
-    bench = commands.add_parser("bench", help="time bubblemesh against the peer meshers")
-    bench.add_argument("--max-elements", type=int, metavar="N", help="largest mesh size")
-    bench.add_argument("--repeats", type=int, metavar="R", help="timings per size")
+    bench = command("bench", "time bubblemesh against the peer meshers")
+    bench.add_argument("--max-elements", type=_whole(1), metavar="N", help="largest mesh size")
+    bench.add_argument("--repeats", type=_whole(1), metavar="R", help="timings per size")
     bench.add_argument("--quick", action="store_true", help="a short run (smoke test)")
     bench.add_argument("--out", type=Path, default=Path("reports"), help="report folder")
     bench.set_defaults(run=_run_bench)
+    parser.set_defaults(debug=False)
     return parser
+
+
+def _whole(least: int):
+    """An argparse type: a whole number >= ``least``."""
+
+    def convert(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = least - 1
+        if value < least:
+            raise argparse.ArgumentTypeError(f"expected a whole number >= {least}, got {text!r}")
+        return value
+
+    return convert
 
 
 def _version() -> str:
@@ -83,15 +204,15 @@ def _version() -> str:
 
 
 def _run_mesh(args: argparse.Namespace) -> int:
+    from bubblemesh import generate, optimize
     from bubblemesh.domain import Domain
+    from bubblemesh.io import check_mesh_path
+    from bubblemesh.quality import summary
 
     domain = Domain.from_poly(args.input)
-    try:
-        from bubblemesh import generate, optimize
-        from bubblemesh.quality import summary
-    except ImportError as error:
-        raise CommandError(f"the meshing kernel is not available: {error}") from None
-
+    check_mesh_path(args.output)  # a bad -o or --plot fails now, not after the meshing
+    if args.plot is not None:
+        _check_plot_path(args.plot)
     mesh = generate(domain, max_insertions=args.max_insertions)
     if not args.no_optimize:
         mesh = optimize(mesh)
@@ -117,11 +238,26 @@ def _summary_line(stats: dict) -> str:
     )
 
 
-def _plot(points, triangles, path: Path) -> None:
+def _check_plot_path(path: Path) -> None:
+    """matplotlib present, a suffix it writes, an existing folder."""
     try:
-        import matplotlib
+        from matplotlib.backend_bases import FigureCanvasBase
     except ImportError:
         raise CommandError("--plot needs matplotlib: pip install 'bubblemesh[plot]'") from None
+    if path.is_dir():
+        raise UsageError(f"--plot {path} is a folder, not a file name")
+    if not path.parent.is_dir():
+        raise UsageError(f"--plot {path}: the folder {path.parent} does not exist")
+    formats = FigureCanvasBase.get_supported_filetypes()
+    if path.suffix.lower().lstrip(".") not in formats:
+        raise UsageError(
+            f"--plot {path}: matplotlib writes only {', '.join('.' + s for s in formats)} files"
+        )
+
+
+def _plot(points, triangles, path: Path) -> None:
+    import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -147,12 +283,23 @@ def _import_cases_module(name: str):
         ) from None
 
 
+def _check_case_names(names: list[str]) -> None:
+    """Every name is one of ``cases.ALL`` (when the package lists its cases)."""
+    known = getattr(sys.modules.get("cases"), "ALL", None)
+    if known is None:
+        return
+    unknown = [name for name in names if name not in known]
+    if unknown:
+        raise UsageError(f"unknown case {unknown[0]!r}; known: {', '.join(known)}")
+
+
 def _exit_status(result) -> int:
     return result if isinstance(result, int) else 0
 
 
 def _run_reproduce(args: argparse.Namespace) -> int:
     reproduce = _import_cases_module("reproduce")
+    _check_case_names(args.cases or [])
     return _exit_status(reproduce.main(cases=args.cases, out=args.out))
 
 

@@ -5,19 +5,45 @@ common plain-text form of one (Shewchuk's Triangle): a vertex list, a segment
 list and hole points.  :func:`read_poly` and :func:`write_poly` only translate
 that format; :class:`bubblemesh.Domain` turns the segments into validated
 loops.  :func:`write_mesh` hands a finished mesh to meshio (VTU, Gmsh ``.msh``
-in the 2.2 format, XDMF, ...), imported lazily since it is needed only here.
+in the 2.2 format, XDMF, ...), imported lazily since it is needed only here;
+:func:`check_mesh_path` tells beforehand whether a path can be written.
+
+Every problem with a file raises a bubblemesh exception: :class:`PolyFormatError`
+(a :class:`~bubblemesh.errors.GeometryError`) for a ``.poly``/``.node`` file that
+cannot be read, naming the file and line, and :class:`MeshFileError` for an
+output path whose format or folder will not do.
 """
 
 from __future__ import annotations
 
+import math
+import re
+import tempfile
 from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
 
 from bubblemesh.errors import GeometryError
+from bubblemesh.predicates import MAX_COORDINATE, out_of_range_message
 
-__all__ = ["PolyFile", "read_poly", "write_poly", "write_mesh"]
+__all__ = [
+    "MeshFileError",
+    "PolyFile",
+    "PolyFormatError",
+    "check_mesh_path",
+    "read_poly",
+    "write_mesh",
+    "write_poly",
+]
+
+
+class PolyFormatError(GeometryError):
+    """A ``.poly`` or ``.node`` file that cannot be read; the message names file and line."""
+
+
+class MeshFileError(ValueError):
+    """A mesh file that cannot be written: unknown format, missing folder, meshio failure."""
 
 
 class PolyFile(NamedTuple):
@@ -29,37 +55,95 @@ class PolyFile(NamedTuple):
     first_index: int  # 0 or 1: how the file numbers its vertices
 
 
-class _Lines:
-    """Non-empty lines of a Triangle file as token lists, comments ('#') removed."""
+# Numbers as C's strtol/strtod write them (what Triangle reads), nothing else:
+# no '1_000', no 'nan', no digits outside ASCII.
+_INTEGER = re.compile(r"[+-]?[0-9]+")
+_REAL = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+_NOT_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
+_MAX_DIGITS = 18  # below 2**63: no count or index of a real file comes near
 
-    def __init__(self, path: Path):
+
+class _Lines:
+    """The data lines of a Triangle file as token lists, with their line numbers.
+
+    As in Triangle, '#' starts a comment anywhere, commas separate like blanks
+    and blank lines are skipped.  Bytes are decoded as ASCII with every other
+    byte replaced, so a Latin-1 or UTF-8 comment reads and a stray byte in a
+    number is a bad number, not a decoding error.
+    """
+
+    def __init__(self, path: Path, text: str):
         self.path = path
         self._rows = []
-        for number, line in enumerate(path.read_text().splitlines(), start=1):
-            tokens = line.split("#", 1)[0].split()
+        lines = text.splitlines()
+        for number, line in enumerate(lines, start=1):
+            tokens = line.split("#", 1)[0].replace(",", " ").split()
             if tokens:
                 self._rows.append((number, tokens))
+        self._last_line = max(len(lines), 1)
         self._next = 0
+
+    @classmethod
+    def read(cls, path: Path, why: str = "") -> _Lines:
+        try:
+            data = path.read_bytes()
+        except OSError as error:
+            reason = error.strerror or type(error).__name__
+            raise PolyFormatError(f"{why}cannot read {path}: {reason}") from error
+        data = data.removeprefix(b"\xef\xbb\xbf")  # a UTF-8 byte-order mark
+        return cls(path, data.decode("ascii", errors="replace"))
+
+    def fail(self, number: int, message: str) -> PolyFormatError:
+        return PolyFormatError(f"{self.path} line {number}: {message}")
 
     def at_end(self) -> bool:
         return self._next >= len(self._rows)
 
     def take(self, what: str, min_tokens: int) -> tuple[int, list[str]]:
+        """The next data line, which must hold at least ``min_tokens`` fields."""
         if self.at_end():
-            raise GeometryError(f"{self.path}: file ends where {what} was expected")
+            raise self.fail(self._last_line, f"the file ends where {what} was expected")
         number, tokens = self._rows[self._next]
         self._next += 1
         if len(tokens) < min_tokens:
-            raise GeometryError(
-                f"{self.path} line {number}: {what} needs {min_tokens} numbers, got {len(tokens)}"
-            )
+            raise self.fail(number, f"{what} needs {min_tokens} numbers, got {len(tokens)}")
         return number, tokens
 
-    def numbers(self, what: str, tokens: list[str], number: int, kind=float) -> list:
-        try:
-            return [kind(token) for token in tokens]
-        except ValueError:
-            raise GeometryError(f"{self.path} line {number}: bad number in {what}") from None
+    def integer(self, token: str, what: str, number: int) -> int:
+        if not _INTEGER.fullmatch(token):
+            raise self.fail(number, f"bad number in {what}: {_shown(token)} is not an integer")
+        if len(token.lstrip("+-").lstrip("0")) > _MAX_DIGITS:
+            raise self.fail(number, f"{what}: {_shown(token)} is out of range")
+        return int(token)
+
+    def real(self, token: str, what: str, number: int) -> float:
+        if _REAL.fullmatch(token):
+            value = float(token)
+            if math.isfinite(value):
+                return value
+        elif not _NOT_FINITE.fullmatch(token):
+            raise self.fail(number, f"bad number in {what}: {_shown(token)} is not a number")
+        raise self.fail(number, f"{what}: {_shown(token)} is not a finite number")
+
+    def count(self, token: str, items: str, number: int, item: str) -> int:
+        """A section's item count, checked before anything is allocated from it:
+        each item takes one line, so no more can follow than there are lines left."""
+        n = self.integer(token, f"the number of {items}", number)
+        if n < 0:
+            raise self.fail(number, f"the number of {items} is negative: {n}")
+        left = len(self._rows) - self._next
+        if n > left:
+            raise self.fail(
+                number,
+                f"the file ends where {item} was expected: {n} {items} announced, "
+                f"{left} data line{' follows' if left == 1 else 's follow'}",
+            )
+        return n
+
+
+def _shown(token: str) -> str:
+    """A token as quoted in a message, cut short."""
+    return repr(token if len(token) <= 24 else token[:20] + "...")
 
 
 def read_poly(path: str | Path) -> PolyFile:
@@ -68,70 +152,99 @@ def read_poly(path: str | Path) -> PolyFile:
     Vertices are numbered from 0 or 1, as the first vertex says, and must be
     consecutive.  A vertex count of 0 reads the vertices from the ``.node``
     file beside it, as Triangle does.  Attributes, boundary markers and the
-    optional regional-attributes section are ignored.
+    optional regional-attributes section are ignored; the holes section may be
+    left out.  Any problem raises :class:`PolyFormatError` naming file and line.
     """
     path = Path(path)
-    lines = _Lines(path)
+    lines = _Lines.read(path)
     number, tokens = lines.take("the vertex header", 1)
-    (n_vertices,) = lines.numbers("the vertex header", tokens[:1], number, int)
-    if n_vertices == 0:
-        vertices, first_index = _read_vertices(_Lines(path.with_suffix(".node")))
+    if _check_header(lines, tokens, number) == 0:
+        node = path.with_suffix(".node")
+        why = f"{path} line {number}: 0 vertices, so they come from {node}, but "
+        vertices, first_index = _read_vertices(_Lines.read(node, why))
     else:
         lines._next -= 1  # the header belongs to the vertex section
         vertices, first_index = _read_vertices(lines)
-
-    number, tokens = lines.take("the segment header", 1)
-    (n_segments,) = lines.numbers("the segment header", tokens[:1], number, int)
-    segments = np.empty((n_segments, 2), dtype=np.int64)
-    for s in range(n_segments):
-        number, tokens = lines.take(f"segment {s + first_index}", 3)
-        segments[s] = lines.numbers("a segment", tokens[1:3], number, int)
-    segments -= first_index
-    outside = (segments < 0) | (segments >= len(vertices))
-    if outside.any():
-        s = int(np.argmax(outside.any(axis=1)))
-        raise GeometryError(
-            f"{path}: segment {s + first_index} names a vertex that does not exist "
-            f"({len(vertices)} vertices numbered from {first_index})"
-        )
-
+    segments = _read_segments(lines, len(vertices), first_index)
     holes = np.empty((0, 2))
     if not lines.at_end():
         number, tokens = lines.take("the hole header", 1)
-        (n_holes,) = lines.numbers("the hole header", tokens[:1], number, int)
-        holes = np.empty((n_holes, 2))
-        for h in range(n_holes):
-            number, tokens = lines.take(f"hole {h + first_index}", 3)
-            holes[h] = lines.numbers("a hole", tokens[1:3], number)
+        n_holes = lines.count(tokens[0], "holes", number, "a hole")
+        rows = [_read_point(lines, f"hole {h + first_index}") for h in range(n_holes)]
+        holes = np.array([point for _, point in rows], dtype=np.float64).reshape(n_holes, 2)
+        _check_range(lines, holes, [number for number, _ in rows], "hole", first_index)
     return PolyFile(vertices, segments, holes, first_index)
+
+
+def _check_header(lines: _Lines, tokens: list[str], number: int) -> int:
+    """The vertex header (count, dimension 2, attributes, markers): its first number."""
+    header = [lines.integer(token, "the vertex header", number) for token in tokens]
+    if len(header) > 1 and header[1] != 2:
+        raise lines.fail(number, f"dimension {header[1]}, expected 2")
+    return header[0]
 
 
 def _read_vertices(lines: _Lines) -> tuple[np.ndarray, int]:
     number, tokens = lines.take("the vertex header", 1)
-    header = lines.numbers("the vertex header", tokens, number, int)
-    n_vertices, dimension = header[0], header[1] if len(header) > 1 else 2
-    if dimension != 2:
-        raise GeometryError(f"{lines.path} line {number}: dimension {dimension}, expected 2")
-    if n_vertices < 1:
-        raise GeometryError(f"{lines.path} line {number}: no vertices")
+    _check_header(lines, tokens, number)
+    n_vertices = lines.count(tokens[0], "vertices", number, "a vertex")
+    if n_vertices == 0:
+        raise lines.fail(number, "no vertices")
     vertices = np.empty((n_vertices, 2))
+    line_of = np.empty(n_vertices, dtype=np.int64)
     first_index = 0
     for v in range(n_vertices):
         number, tokens = lines.take("a vertex", 3)
-        (index,) = lines.numbers("a vertex number", tokens[:1], number, int)
+        line_of[v] = number
+        index = lines.integer(tokens[0], "a vertex number", number)
         if v == 0:
             if index not in (0, 1):
-                raise GeometryError(
-                    f"{lines.path} line {number}: vertices must be numbered from 0 or 1"
-                )
+                raise lines.fail(number, "vertices must be numbered from 0 or 1")
             first_index = index
         elif index != v + first_index:
-            raise GeometryError(
-                f"{lines.path} line {number}: vertex {index} where {v + first_index} was "
-                "expected; vertices must be numbered consecutively"
+            raise lines.fail(
+                number,
+                f"vertex {index} where {v + first_index} was expected; "
+                "vertices must be numbered consecutively",
             )
-        vertices[v] = lines.numbers("a vertex", tokens[1:3], number)
+        vertices[v] = [lines.real(token, "a vertex", number) for token in tokens[1:3]]
+    _check_range(lines, vertices, line_of, "vertex", first_index)
     return vertices, first_index
+
+
+def _check_range(lines: _Lines, points: np.ndarray, line_of, what: str, first_index: int) -> None:
+    """No coordinate above the exact predicates' range, where the line is still known:
+    such values overflow the loop areas before Domain checks its ranges.  Tiny ones
+    are left to Domain, so every file read before still reads."""
+    outside = (np.abs(points) > MAX_COORDINATE).any(axis=1)
+    if outside.any():
+        k = int(np.argmax(outside))
+        message = out_of_range_message(points[k])
+        raise lines.fail(int(line_of[k]), f"{what} {k + first_index} = {message}")
+
+
+def _read_segments(lines: _Lines, n_vertices: int, first_index: int) -> np.ndarray:
+    number, tokens = lines.take("the segment header", 1)
+    n_segments = lines.count(tokens[0], "segments", number, "a segment")
+    segments = np.empty((n_segments, 2), dtype=np.int64)
+    for s in range(n_segments):
+        name = f"segment {s + first_index}"
+        number, tokens = lines.take(name, 3)
+        ends = [lines.integer(token, name, number) - first_index for token in tokens[1:3]]
+        for end in ends:
+            if not 0 <= end < n_vertices:
+                raise lines.fail(
+                    number,
+                    f"{name} names a vertex that does not exist: vertex {end + first_index} "
+                    f"({n_vertices} vertices numbered from {first_index})",
+                )
+        segments[s] = ends
+    return segments
+
+
+def _read_point(lines: _Lines, what: str) -> tuple[int, list[float]]:
+    number, tokens = lines.take(what, 3)
+    return number, [lines.real(token, what, number) for token in tokens[1:3]]
 
 
 def write_poly(
@@ -167,7 +280,87 @@ def write_poly(
     Path(path).write_text("\n".join(out) + "\n")
 
 
+# meshio's first choice for these suffixes is not the one wanted (.msh would be ANSYS)
 _FORMAT_BY_SUFFIX = {".msh": "gmsh22", ".xdmf": "xdmf", ".xmf": "xdmf"}
+# formats meshio knows but that keep no triangles (it skips them with a warning)
+_NO_TRIANGLES = {"tetgen": "tetrahedra", "flac3d": "3-D cells"}
+
+
+def _meshio():
+    try:
+        import meshio
+    except ImportError as error:
+        raise ImportError("writing meshes needs meshio: pip install meshio") from error
+    return meshio
+
+
+def _mesh_format(path: Path, file_format: str | None) -> str:
+    """The meshio format for ``path``: ``file_format``, else from the suffix as meshio
+    reads it (compound suffixes such as ``.vol.gz`` included)."""
+    meshio = _meshio()
+    if file_format:
+        return file_format
+    if path.suffix.lower() in _FORMAT_BY_SUFFIX:
+        return _FORMAT_BY_SUFFIX[path.suffix.lower()]
+    table = meshio.extension_to_filetypes
+    ending = ""
+    for suffix in reversed(path.suffixes):
+        ending = (suffix + ending).lower()
+        if table.get(ending):
+            return table[ending][0]
+    known = ", ".join(sorted(table))
+    raise MeshFileError(
+        f"{path}: cannot tell the mesh format from the suffix {path.suffix or '(none)'!r}; "
+        f"use one of {known}"
+    )
+
+
+def check_mesh_path(path: str | Path, file_format: str | None = None) -> str:
+    """Check that a triangle mesh can be written to ``path``; return the meshio format.
+
+    Raises :class:`MeshFileError` when the format is unknown or keeps no
+    triangles, when ``path`` is a folder or its folder is missing, or when
+    meshio fails to write a one-triangle mesh with point and cell data in that
+    format (into a temporary folder; some writers need optional packages or
+    cannot store cell data).  Meant to run before a long meshing job.
+    """
+    import contextlib
+    import io as text_io
+    import os
+
+    path = Path(path)
+    if path.is_dir():
+        raise MeshFileError(f"{path} is a folder, not a mesh file name")
+    file_format = _mesh_format(path, file_format)
+    if file_format in _NO_TRIANGLES:
+        raise MeshFileError(
+            f"{path}: meshio's {file_format} format keeps only {_NO_TRIANGLES[file_format]}, "
+            "no triangles"
+        )
+    folder = path.parent
+    if not folder.is_dir():
+        missing = "is not a folder" if folder.exists() else "does not exist"
+        raise MeshFileError(f"{path}: the folder {folder} {missing}")
+    if not os.access(folder, os.W_OK):
+        raise MeshFileError(f"{path}: the folder {folder} is not writable")
+    with tempfile.TemporaryDirectory() as scratch:
+        try:
+            with contextlib.redirect_stderr(text_io.StringIO()):  # meshio's own warnings
+                write_mesh(
+                    Path(scratch) / path.name,
+                    np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]),
+                    np.array([[0, 1, 2]]),
+                    point_data={"real": np.zeros(3), "flag": np.zeros(3, dtype=np.int64)},
+                    cell_data={"quality": np.ones(1)},
+                    file_format=file_format,
+                )
+        except Exception as error:  # any failure of meshio's writer: say it now
+            cause = (error.__cause__ if isinstance(error, MeshFileError) else None) or error
+            raise MeshFileError(
+                f"{path}: meshio cannot write a triangle mesh as {file_format!r}: "
+                f"{type(cause).__name__}: {cause}"
+            ) from error
+    return file_format
 
 
 def write_mesh(
@@ -186,17 +379,18 @@ def write_mesh(
     ``file_format`` (a meshio format name) to choose otherwise.  Points are
     padded to 3-D with z = 0 (VTU and Gmsh store 3-D points).
     ``cell_data`` maps a name to one value per triangle; ``meshio_kwargs`` go
-    to ``meshio.write`` (e.g. ``binary=False`` for Gmsh).
+    to ``meshio.write`` (e.g. ``binary=False`` for VTU).  An unknown format, a
+    missing folder or a meshio writer error raises :class:`MeshFileError`.
     """
-    try:
-        import meshio
-    except ImportError as error:
-        raise ImportError("write_mesh needs meshio: pip install meshio") from error
+    meshio = _meshio()
+    path = Path(path)
+    file_format = _mesh_format(path, file_format)
+    if not path.parent.is_dir():
+        raise MeshFileError(f"{path}: the folder {path.parent} does not exist")
     points = np.asarray(points, dtype=np.float64)
     triangles = np.asarray(triangles, dtype=np.int64)
     points3 = np.column_stack([points, np.zeros(len(points))])
     cells = {name: [np.asarray(values)] for name, values in (cell_data or {}).items()}
-    file_format = file_format or _FORMAT_BY_SUFFIX.get(Path(path).suffix.lower())
     if file_format == "gmsh22":
         # Gmsh elements carry physical and geometrical tags; tag every triangle 1.
         ones = np.ones(len(triangles), dtype=np.int32)
@@ -210,4 +404,7 @@ def write_mesh(
     )
     # (Gmsh stays binary: meshio's ASCII writer prints numpy 2 scalars as "np.float64(...)")
     options = {"data_format": "XML"} if file_format == "xdmf" else {}
-    meshio.write(path, mesh, file_format=file_format, **{**options, **meshio_kwargs})
+    try:
+        meshio.write(path, mesh, file_format=file_format, **{**options, **meshio_kwargs})
+    except (meshio.WriteError, ImportError) as error:  # unknown format, missing optional package
+        raise MeshFileError(f"{path}: meshio cannot write {file_format!r}: {error}") from error

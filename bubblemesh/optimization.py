@@ -148,10 +148,10 @@ def _check_parameters(*, amplification: Any, alpha: Any, skin: Any, rings: Any,
          f"in (0, {MAX_AMPLIFICATION}]"),
         ("alpha", alpha, lambda v: 0 < v <= MAX_ALPHA, f"in (0, {MAX_ALPHA}]"),
         ("skin", skin, lambda v: v > 0, "> 0 (inf disables the lists)"),
-        ("rings", rings, lambda v: isinstance(v, numbers.Integral) and 1 <= v <= MAX_RINGS,
+        ("rings", rings, lambda v: isinstance(v, numbers.Integral) and 1 <= int(v) <= MAX_RINGS,
          f"an integer in 1..{MAX_RINGS}"),
         ("max_iterations", max_iterations,
-         lambda v: isinstance(v, numbers.Integral) and v >= 0, "an integer >= 0"),
+         lambda v: isinstance(v, numbers.Integral) and int(v) >= 0, "an integer >= 0"),
         ("tol", tol, lambda v: math.isfinite(v) and v >= 0, "finite and >= 0"),
     ]
     for name, value, ok, expected in rules:

@@ -11,8 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bubblemesh.cli import main
+from bubblemesh.cli import EXIT_STATUS, main
 from bubblemesh.domain import Domain
+from bubblemesh.errors import MeshingError
 
 SQUARE_WITH_HOLE = [
     [(0.0, 0.0), (0.25, 0.0), (0.5, 0.0), (0.75, 0.0), (1.0, 0.0), (1.0, 0.5),
@@ -28,21 +29,6 @@ def poly(tmp_path) -> Path:
     return path
 
 
-def kernel_available() -> bool:
-    try:
-        from bubblemesh import generate, optimize  # noqa: F401
-        from bubblemesh.quality import summary  # noqa: F401
-    except ImportError:
-        return False
-    return True
-
-
-needs_kernel = pytest.mark.skipif(
-    not kernel_available(), reason="bubblemesh.generate not importable yet"
-)
-
-
-@needs_kernel
 @pytest.mark.parametrize("optimize", [True, False])
 def test_mesh_writes_the_mesh_and_reports_it(poly, tmp_path, capsys, optimize):
     meshio = pytest.importorskip("meshio")
@@ -68,7 +54,6 @@ def test_mesh_writes_the_mesh_and_reports_it(poly, tmp_path, capsys, optimize):
     assert 0.5 * cross.sum() == pytest.approx(0.96, rel=1e-12)
 
 
-@needs_kernel
 def test_mesh_max_insertions_and_plot(poly, tmp_path, capsys):
     pytest.importorskip("matplotlib")
     png = tmp_path / "square.png"
@@ -80,19 +65,164 @@ def test_mesh_max_insertions_and_plot(poly, tmp_path, capsys):
     assert png.read_bytes().startswith(b"\x89PNG")
 
 
-def test_mesh_reports_geometry_errors_without_traceback(tmp_path, capsys):
+def error_line(capsys, command: str = "mesh") -> str:
+    """The one line on stderr, which must read 'bubblemesh COMMAND: error: ...'."""
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and err.endswith("\n"), err
+    assert err.startswith(f"bubblemesh {command}: error: "), err
+    return err
+
+
+@pytest.fixture
+def meshing(monkeypatch) -> list:
+    """Records calls of bubblemesh.generate (which then fails the test if it was not meant
+    to run: a bad option must be caught before the meshing)."""
+    import bubblemesh
+
+    calls: list = []
+    monkeypatch.setattr(bubblemesh, "generate", lambda *a, **k: calls.append(a) or 1 / 0)
+    return calls
+
+
+def test_mesh_reports_geometry_errors_on_one_line(tmp_path, capsys):
     path = tmp_path / "bow.poly"
     path.write_text("4 2 0 0\n1 0 0\n2 1 1\n3 1 0\n4 0 1\n4 0\n1 1 2\n2 2 3\n3 3 4\n4 4 1\n")
-    assert main(["mesh", str(path), "-o", str(tmp_path / "x.vtu")]) == 1
-    error = capsys.readouterr().err
-    assert "bubblemesh mesh: error:" in error
-    assert "loop 0 (outer) segment 2 crosses loop 0 (outer) segment 0" in error
-    assert "Traceback" not in error
+    assert main(["mesh", str(path), "-o", str(tmp_path / "x.vtu")]) == 2
+    assert "loop 0 (outer) segment 2 crosses loop 0 (outer) segment 0" in error_line(capsys)
 
 
-def test_mesh_missing_input_file(tmp_path, capsys):
-    assert main(["mesh", str(tmp_path / "none.poly"), "-o", str(tmp_path / "x.vtu")]) == 1
-    assert "none.poly" in capsys.readouterr().err
+def test_mesh_missing_input_file(tmp_path, capsys, meshing):
+    assert main(["mesh", str(tmp_path / "none.poly"), "-o", str(tmp_path / "x.vtu")]) == 2
+    assert f"cannot read {tmp_path / 'none.poly'}" in error_line(capsys)
+    assert meshing == []
+
+
+@pytest.mark.parametrize(
+    ("text", "line", "words"),
+    [
+        ("1000000000000 2 0 0\n", 1, "1000000000000 vertices"),
+        ("3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n-3 0\n", 5, "negative"),
+        ("3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n1 0\n1 1 99999999999999999999999\n", 6, "out of range"),
+        ("# caf\xe9\n0 2 0 0\n3 0\n1 1 2\n2 2 3\n3 3 1\n", 2, "bad.node"),
+    ],
+)  # fmt: skip
+def test_mesh_reports_poly_errors_with_file_and_line(tmp_path, capsys, meshing, text, line, words):
+    path = tmp_path / "bad.poly"
+    path.write_bytes(text.encode("latin-1"))
+    assert main(["mesh", str(path), "-o", str(tmp_path / "x.vtu")]) == 2
+    message = error_line(capsys)
+    assert f"{path} line {line}: " in message and words in message
+    assert meshing == []
+
+
+@pytest.mark.parametrize(
+    ("output", "words"),
+    [
+        ("out.xyz", "cannot tell the mesh format from the suffix '.xyz'"),
+        ("out", "cannot tell the mesh format"),
+        (".", "is a folder"),
+        ("nodir/x.vtu", "nodir does not exist"),
+        ("x.node", "no triangles"),
+    ],
+)
+def test_bad_output_fails_before_meshing(poly, tmp_path, capsys, meshing, output, words):
+    before = sorted(tmp_path.iterdir())
+    assert main(["mesh", str(poly), "-o", str(tmp_path / output)]) == 2
+    assert words in error_line(capsys)
+    assert meshing == [] and sorted(tmp_path.iterdir()) == before
+
+
+@pytest.mark.parametrize(
+    ("plot", "words"),
+    [("nodir/x.png", "nodir does not exist"), ("x.foo", "matplotlib writes only"), (".", "folder")],
+)
+def test_bad_plot_path_fails_before_meshing(poly, tmp_path, capsys, meshing, plot, words):
+    pytest.importorskip("matplotlib")
+    out = tmp_path / "x.vtu"
+    assert main(["mesh", str(poly), "-o", str(out), "--plot", str(tmp_path / plot)]) == 2
+    assert words in error_line(capsys)
+    assert meshing == [] and not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("argv", "command", "words"),
+    [
+        (["mesh", "p.poly", "-o", "x.vtu", "--max-insertions", "-1"], "mesh", "--max-insertions"),
+        (["mesh", "p.poly", "-o", "x.vtu", "--max-insertions", "2.5"], "mesh", "'2.5'"),
+        (["mesh", "p.poly"], "mesh", "-o/--output"),
+        (["mesh", "p.poly", "-o", "x.vtu", "--frobnicate"], "mesh", "--frobnicate"),
+        (["bench", "--repeats", "0"], "bench", "--repeats"),
+        (["nosuchcommand"], "", "nosuchcommand"),
+        ([], "", "COMMAND"),
+    ],
+)  # fmt: skip
+def test_usage_errors_are_one_line_with_status_2(capsys, meshing, argv, command, words):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1, err
+    assert err.startswith(f"bubblemesh {command}: error: ".replace(" :", ":")), err
+    assert words in err
+    assert meshing == []
+
+
+def failing_generate(monkeypatch, error: BaseException) -> None:
+    import bubblemesh
+
+    def generate(*args, **kwargs):
+        raise error
+
+    monkeypatch.setattr(bubblemesh, "generate", generate)
+
+
+@pytest.mark.parametrize(
+    ("error", "status", "words"),
+    [
+        (MeshingError("bound hit\nat insertion 7"), 1, "bound hit at insertion 7"),
+        (ValueError("max_insertions must be >= 0"), 2, "max_insertions must be >= 0"),
+        (OSError(28, "No space left on device"), 1, "No space left on device"),
+        (ZeroDivisionError("division by zero"), 1, "unexpected ZeroDivisionError: division by"),
+        (KeyError(), 1, "error: unexpected KeyError (--debug shows where)"),
+        (MeshingError(), 1, "error: MeshingError"),
+        (KeyboardInterrupt(), 130, "interrupted"),
+    ],
+)
+def test_errors_while_meshing_are_one_line(
+    poly, tmp_path, capsys, monkeypatch, error, status, words
+):
+    failing_generate(monkeypatch, error)
+    assert main(["mesh", str(poly), "-o", str(tmp_path / "x.vtu")]) == status
+    assert words in error_line(capsys)
+
+
+@pytest.mark.parametrize("where", ["before", "after"])
+def test_debug_shows_the_traceback_of_unexpected_errors(poly, tmp_path, monkeypatch, where):
+    failing_generate(monkeypatch, ZeroDivisionError("division by zero"))
+    argv = ["mesh", str(poly), "-o", str(tmp_path / "x.vtu")]
+    with pytest.raises(ZeroDivisionError):
+        main(["--debug", *argv] if where == "before" else [*argv, "--debug"])
+
+
+def test_debug_keeps_expected_errors_on_one_line(poly, tmp_path, capsys, monkeypatch):
+    failing_generate(monkeypatch, MeshingError("bound hit"))
+    assert main(["--debug", "mesh", str(poly), "-o", str(tmp_path / "x.vtu")]) == 1
+    assert "bound hit" in error_line(capsys)
+
+
+def test_warnings_are_one_line_each(poly, tmp_path, capsys, monkeypatch):
+    import warnings
+
+    import bubblemesh
+
+    def generate(*args, **kwargs):
+        warnings.warn("first\nsecond", RuntimeWarning, stacklevel=1)
+        raise MeshingError("stopped")
+
+    monkeypatch.setattr(bubblemesh, "generate", generate)
+    assert main(["mesh", str(poly), "-o", str(tmp_path / "x.vtu")]) == 1
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 2, lines
+    assert lines[0].startswith("bubblemesh mesh: warning: first second (RuntimeWarning")
+    assert lines[1] == "bubblemesh mesh: error: stopped"
 
 
 def fake_cases_module(monkeypatch, name: str, returns=None) -> list:
@@ -103,7 +233,14 @@ def fake_cases_module(monkeypatch, name: str, returns=None) -> list:
     return calls
 
 
+def fake_cases_package(monkeypatch, names) -> None:
+    package = types.ModuleType("cases")
+    package.ALL = dict.fromkeys(names)  # type: ignore[attr-defined]
+    monkeypatch.setitem(sys.modules, "cases", package)
+
+
 def test_reproduce_passes_cases_and_out(monkeypatch, tmp_path):
+    fake_cases_package(monkeypatch, ["fig3", "fig5"])
     calls = fake_cases_module(monkeypatch, "reproduce")
     assert main(["reproduce", "--case", "fig3", "--case", "fig5", "--out", str(tmp_path)]) == 0
     assert calls == [{"cases": ["fig3", "fig5"], "out": tmp_path}]
@@ -119,10 +256,61 @@ def test_bench_passes_only_the_options_given(monkeypatch, tmp_path):
     assert calls[-1] == {"quick": False, "out": Path("reports"), "max_elements": 5000, "repeats": 2}
 
 
+def test_unknown_case_is_a_usage_error(monkeypatch, capsys):
+    fake_cases_package(monkeypatch, ["fig3", "fig5"])
+    calls = fake_cases_module(monkeypatch, "reproduce")
+    assert main(["reproduce", "--case", "fig3", "--case", "nope"]) == 2
+    assert "unknown case 'nope'; known: fig3, fig5" in error_line(capsys, "reproduce")
+    assert calls == []
+
+
 def test_missing_cases_package_is_a_clear_error(monkeypatch, capsys):
     monkeypatch.setitem(sys.modules, "cases.benchmark", None)  # import fails as if absent
     assert main(["bench", "--quick"]) == 1
-    assert "needs the repository's cases package" in capsys.readouterr().err
+    assert "needs the repository's cases package" in error_line(capsys, "bench")
+
+
+def test_a_package_missing_under_the_cases_is_one_line(monkeypatch, capsys):
+    import importlib
+
+    def import_module(name, package=None):
+        raise ModuleNotFoundError("No module named 'tqdm'", name="tqdm")
+
+    monkeypatch.setattr(importlib, "import_module", import_module)
+    assert main(["reproduce"]) == 1
+    assert "No module named 'tqdm'" in error_line(capsys, "reproduce")
+
+
+@pytest.mark.parametrize(
+    ("args", "status", "words"),
+    [
+        (["-o", "OUT.xyz"], 2, "cannot tell the mesh format"),
+        (["-o", "OUT.vtu", "--max-insertions", "-1"], 2, "--max-insertions"),
+        (["-o", "OUT.vtu", "--max-insertions", "2"], 0, None),
+    ],
+)
+def test_the_program_exit_status_and_stderr(poly, tmp_path, args, status, words):
+    argv = [a.replace("OUT", str(tmp_path / "out")) for a in args]
+    result = subprocess.run(
+        [sys.executable, "-m", "bubblemesh.cli", "mesh", str(poly), *argv],
+        capture_output=True,
+        text=True,
+    )
+    assert result.returncode == status, result.stderr
+    if words is None:
+        assert result.stderr == "" and (tmp_path / "out.vtu").exists()
+    else:
+        assert len(result.stderr.splitlines()) == 1, result.stderr
+        assert result.stderr.startswith("bubblemesh mesh: error: ") and words in result.stderr
+
+
+def test_help_documents_the_exit_status(capsys):
+    for argv in (["--help"], ["mesh", "--help"]):
+        assert main(argv) == 0
+        printed = capsys.readouterr().out
+        assert EXIT_STATUS in printed
+        assert "--debug" in printed
+    assert all(f"  {status} " in EXIT_STATUS for status in (0, 1, 2, 130))
 
 
 def test_module_runs_as_a_program():
