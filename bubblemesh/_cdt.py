@@ -7,7 +7,7 @@ import numpy as np
 from numba import njit
 
 from ._cavity import is_ghost, orient, strictly_between
-from ._status import ERR_RECOVERY, ERR_STACK, ERR_VERTEX_ON_SEGMENT, OK
+from ._status import ERR_RECOVERY, ERR_SEGMENTS_CROSS, ERR_STACK, ERR_VERTEX_ON_SEGMENT, OK
 from .predicates import incircle
 
 
@@ -133,9 +133,10 @@ def _lawson(P, tri, nbr, con, vt, stack_t, stack_i, top, max_flips):
 
 
 @njit(cache=True)
-def _crossed_edges(P, tri, nbr, vt, a, b, qu, qw, max_steps):
+def _crossed_edges(P, tri, nbr, con, vt, a, b, qu, qw, max_steps):
     """Edges properly crossed by segment a-b, as vertex pairs in qu/qw.
-    Returns (status, count); count 0 with OK means a-b is already an edge."""
+    Returns (status, count); count 0 with OK means a-b is already an edge.
+    Crossing a constrained edge is ERR_SEGMENTS_CROSS (its vertex x as count)."""
     # find the triangle around a whose wedge contains the direction to b
     t = vt[a]
     start = t
@@ -172,7 +173,10 @@ def _crossed_edges(P, tri, nbr, vt, a, b, qu, qw, max_steps):
         qu[count] = x
         qw[count] = y
         count += 1
-        n = nbr[t, _opposite(tri, t, x, y)]
+        j = _opposite(tri, t, x, y)
+        if con[t, j]:
+            return ERR_SEGMENTS_CROSS, x
+        n = nbr[t, j]
         z = -1
         for m in range(3):
             if tri[n, m] != x and tri[n, m] != y:
@@ -197,7 +201,7 @@ def recover_segment(P, tri, nbr, con, vt, a, b, qu, qw, stack_t, stack_i, max_st
     """Make a-b an edge by flipping the edges it crosses (Sloan's queue), mark it
     constrained, then restore the constrained Delaunay property by Lawson flips
     around every triangle the recovery changed.  Returns (status, vertex)."""
-    status, k = _crossed_edges(P, tri, nbr, vt, a, b, qu, qw, max_steps)
+    status, k = _crossed_edges(P, tri, nbr, con, vt, a, b, qu, qw, max_steps)
     if status != OK:
         return status, k
     top = 0

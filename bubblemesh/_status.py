@@ -18,6 +18,7 @@ ERR_COLLINEAR = -5
 ERR_VERTEX_ON_SEGMENT = -6
 ERR_RECOVERY = -7
 ERR_STACK = -8
+ERR_SEGMENTS_CROSS = -9
 
 # the §2 insertion loop's stops (positive) and failure
 STOP_POPULATION = 1  # eq. 6 reached
@@ -34,10 +35,11 @@ MESSAGES = {
     ERR_VERTEX_ON_SEGMENT: "a vertex lies on a segment",
     ERR_RECOVERY: "segment recovery exceeded its flip bound",
     ERR_STACK: "flip stack exceeded its bound",
+    ERR_SEGMENTS_CROSS: "two segments cross",
     ERR_EMPTY_QUEUE: "priority queue ran empty",
 }
 
-_INPUT_FAULTS = (ERR_COLLINEAR, ERR_VERTEX_ON_SEGMENT)
+_INPUT_FAULTS = (ERR_COLLINEAR, ERR_VERTEX_ON_SEGMENT, ERR_SEGMENTS_CROSS)
 
 
 def raise_for(status: int, what: str, where: str = "") -> None:

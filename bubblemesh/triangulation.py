@@ -13,9 +13,9 @@ import numpy as np
 from ._cdt import compact, interior_mask, recover_segments
 from ._delaunay import delaunay_kernel
 from ._ordering import hilbert_order
-from ._status import ERR_STACK, ERR_VERTEX_ON_SEGMENT, OK, raise_for
+from ._status import ERR_SEGMENTS_CROSS, ERR_STACK, ERR_VERTEX_ON_SEGMENT, OK, raise_for
 from .errors import GeometryError
-from .predicates import out_of_range, out_of_range_message
+from .predicates import orient2d, out_of_range, out_of_range_message
 
 __all__ = ["constrained_delaunay", "delaunay"]
 
@@ -68,6 +68,19 @@ def delaunay(points):
     return np.ascontiguousarray(tri[:ntri][real])
 
 
+def _crossing_at(P: np.ndarray, S: np.ndarray, s: int, v: int) -> str:
+    """The segment at vertex ``v`` that segment ``s`` properly crosses (the
+    kernel stopped at a constrained edge from ``v``), by exact orientation."""
+    a, b = S[s]
+    for k in np.flatnonzero((S == v).any(axis=1)):
+        x, y = S[k]
+        sides = [orient2d(*P[a], *P[b], *P[w]) for w in (x, y)]
+        other = [orient2d(*P[x], *P[y], *P[w]) for w in (a, b)]
+        if sides[0] * sides[1] < 0 and other[0] * other[1] < 0:
+            return f"{int(k)} = {(int(x), int(y))}"
+    return f"at vertex {v}"
+
+
 def constrained_delaunay(points, segments):
     """Constrained Delaunay triangulation of the region enclosed by ``segments``
     (paper §2.1 and §3.5): triangles outside the outer loop and inside holes are
@@ -94,7 +107,12 @@ def constrained_delaunay(points, segments):
         capacity *= 4
     if status != OK:
         where = f" (segment {s} = {tuple(int(x) for x in S[s])}"
-        where += f", vertex {v})" if status == ERR_VERTEX_ON_SEGMENT else ")"
+        if status == ERR_VERTEX_ON_SEGMENT:
+            where += f", vertex {v})"
+        elif status == ERR_SEGMENTS_CROSS:
+            where += f" and segment {_crossing_at(P, S, s, v)})"
+        else:
+            where += ")"
         raise_for(status, "constrained delaunay", where)
     keep = interior_mask(tri, nbr, con, ntri)
     return compact(tri[:ntri], nbr[:ntri], keep)

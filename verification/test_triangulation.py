@@ -324,3 +324,33 @@ def test_radix_argsort_is_numpys_stable_argsort(values, spread):
     if spread:
         keys = keys % (spread + 1) * (2**32 // (spread + 1))
     assert np.array_equal(_radix_argsort(keys, 2), np.argsort(keys, kind="stable"))
+
+
+def _properly_cross(P, s, t):
+    """Exact: do segments s and t cross at a point interior to both?"""
+    a, b = (tuple(int(c) for c in P[i]) for i in s)
+    c, d = (tuple(int(c) for c in P[i]) for i in t)
+    return (O.orient_int(a, b, c) * O.orient_int(a, b, d) < 0
+            and O.orient_int(c, d, a) * O.orient_int(c, d, b) < 0)
+
+
+@given(st.lists(st.tuples(st.integers(0, 6), st.integers(0, 6)), min_size=4, max_size=12,
+                unique=True),
+       st.lists(st.tuples(st.integers(0, 11), st.integers(0, 11)), min_size=1, max_size=6))
+def test_crossing_segments_are_refused_never_dropped(points, pairs):
+    """Segments that properly cross (exact integer oracle) raise a GeometryError
+    naming both (a dropped
+    constraint used to give a triangulation without it, silently): the exact
+    oracle and the triangulation agree on whether any two segments cross."""
+    P = np.array(points, dtype=np.float64)
+    S = [(a, b) for a, b in pairs if a < len(P) and b < len(P) and a != b]
+    if not S:
+        return
+    crossing = any(_properly_cross(P, s, t) for i, s in enumerate(S) for t in S[i + 1:])
+    try:
+        bm.constrained_delaunay(P, np.array(S))
+    except bm.GeometryError as error:
+        if "cross" in str(error):
+            assert crossing, f"no two segments cross, yet: {error}"
+        return  # collinear input or a vertex on a segment: other checks cover these
+    assert not crossing, "crossing segments were accepted"
