@@ -61,7 +61,7 @@ def _radix_argsort(keys, digits):
     return order
 
 
-def hilbert_order(points):
+def hilbert_order(points: np.ndarray) -> np.ndarray:
     """Insertion order along a Hilbert curve: each new point lands next to the
     previous one, so the walking point location takes O(1) steps on average."""
     if len(points) == 0:

@@ -76,7 +76,9 @@ def _gather_nodes(P, R, old_of_new):
     return points, radii
 
 
-def spatial_renumbering(points, radii, triangles, neighbors, n_fixed):
+def spatial_renumbering(points: np.ndarray, radii: np.ndarray, triangles: np.ndarray,
+                        neighbors: np.ndarray, n_fixed: int
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Renumber nodes after ``n_fixed`` along a Hilbert curve, and triangles by
     their lowest new node.
 

@@ -76,7 +76,8 @@ def _rings_in_blocks(ptr, idx, rings, blocks, out, counts, written):
                                  out, b * share, share, counts)
 
 
-def ring_neighbors(ptr, idx, n, rings, per_node=48):
+def ring_neighbors(ptr: np.ndarray, idx: np.ndarray, n: int, rings: int, per_node: int = 48
+                   ) -> tuple[np.ndarray, np.ndarray]:
     """CSR of the nodes within 1..rings topological rings of each node (§3.3),
     in breadth-first order.
 
@@ -105,7 +106,7 @@ def ring_neighbors(ptr, idx, n, rings, per_node=48):
     return ring_ptr, out[:end]  # a view: copying would raise the peak memory
 
 
-def vertex_triangles(triangles, n):
+def vertex_triangles(triangles: np.ndarray, n: int) -> np.ndarray:
     """One triangle incident to each node (the last one listed)."""
     home = np.full(n, -1, np.int64)
     home[triangles.ravel()] = np.repeat(np.arange(len(triangles)), 3)

@@ -33,7 +33,7 @@ _NODE_FIELDS = {
 _UNSET = {"nbr": -1, "vt": -1, "vstart": -1}  # initial value if not 0
 
 
-def _records(rows, record_bytes, fields):
+def _records(rows: int, record_bytes: int, fields: list) -> dict[str, np.ndarray]:
     """Zeroed, cache-line-aligned records; returns {name: strided view}."""
     buf = np.zeros(rows * record_bytes + 64, np.uint8)
     skip = -buf.ctypes.data % 64
@@ -59,7 +59,20 @@ class Workspace:
     stamps are int32 (widened to int64 in the returned mesh); runs that could
     pass 2**31 - 1 use int64 records."""
 
-    def __init__(self, points, radii, tri, nbr, n_cap, t_cap, wide=False):
+    # strided views into the records, set by _allocate
+    P: np.ndarray
+    R: np.ndarray
+    vt: np.ndarray
+    vstart: np.ndarray
+    tri: np.ndarray
+    nbr: np.ndarray
+    con: np.ndarray
+    mark: np.ndarray
+    density: np.ndarray
+    r_e: np.ndarray
+
+    def __init__(self, points: np.ndarray, radii: np.ndarray, tri: np.ndarray, nbr: np.ndarray,
+                 n_cap: int, t_cap: int, wide: bool = False) -> None:
         self.index = np.int64 if wide else np.int32
         self._allocate(n_cap, t_cap)
         n0, m0 = len(points), len(tri)
@@ -69,7 +82,7 @@ class Workspace:
         self.nbr[:m0] = nbr
         self.keys, self.ids = heap_arrays(2 * t_cap, self.index)
 
-    def _allocate(self, n_cap, t_cap):
+    def _allocate(self, n_cap: int, t_cap: int) -> None:
         nodes = _records(n_cap + 1, *_NODE_FIELDS[self.index])  # + the ghost's vstart slot
         nodes["P"], nodes["R"], nodes["vt"] = (nodes[k][:n_cap] for k in ("P", "R", "vt"))
         triangles = _records(t_cap, *_TRIANGLE_FIELDS[self.index])
@@ -79,7 +92,7 @@ class Workspace:
         self.bnd = np.zeros((t_cap + 2, 4), self.index)
         self.newt = np.zeros(t_cap + 2, self.index)
 
-    def grow(self):
+    def grow(self) -> None:
         """Double every capacity, keeping contents (heap entries included)."""
         if self.index == np.int32 and not fits_int32(2 * len(self.tri)):
             raise MeshingError("generation: more triangles than the id type holds")
@@ -93,7 +106,7 @@ class Workspace:
         ids[: len(self.ids)] = self.ids
         self.keys, self.ids = keys, ids
 
-    def kernel_args(self):
+    def kernel_args(self) -> tuple[np.ndarray, ...]:
         return (self.P, self.R, self.tri, self.nbr, self.con, self.vt, self.r_e, self.density,
                 self.keys, self.ids)
 

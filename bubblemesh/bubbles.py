@@ -10,6 +10,7 @@
 """
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 from numba import njit
@@ -17,7 +18,7 @@ from numba import njit
 BOUNDARY_FACTOR = math.sqrt(3.0) / (8.0 * math.pi)  # eq. 2
 
 
-def boundary_radii(points, loops):
+def boundary_radii(points: np.ndarray, loops: Sequence[np.ndarray]) -> np.ndarray:
     """Eq. 1-2 for every boundary node: l1, l2 are the lengths of the loop's
     segments arriving at and leaving the node.  Returns (N,) float64, in the
     order of ``points``."""

@@ -6,9 +6,11 @@ triangle, tending to 0 as the triangle degenerates.
 """
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 
-def _side_lengths(points, triangles):
+def _side_lengths(points: ArrayLike, triangles: ArrayLike
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     p = np.asarray(points, dtype=np.float64)[np.asarray(triangles)]
     a = np.linalg.norm(p[:, 2] - p[:, 1], axis=1)  # opposite vertex 0
     b = np.linalg.norm(p[:, 0] - p[:, 2], axis=1)  # opposite vertex 1
@@ -16,14 +18,14 @@ def _side_lengths(points, triangles):
     return a, b, c
 
 
-def radius_ratio(points, triangles):
+def radius_ratio(points: ArrayLike, triangles: ArrayLike) -> np.ndarray:
     """Eq. 10 for every triangle, (M,) float64 in [0, 1]."""
     a, b, c = _side_lengths(points, triangles)
     rho = (b + c - a) * (c + a - b) * (a + b - c) / (a * b * c)
     return np.clip(rho, 0.0, 1.0)
 
 
-def angles(points, triangles):
+def angles(points: ArrayLike, triangles: ArrayLike) -> np.ndarray:
     """Interior angles in degrees, (M, 3): column i is the angle at vertex i.
 
     atan2(|cross|, dot) of the two edge vectors stays accurate on needles, where
@@ -39,7 +41,7 @@ def angles(points, triangles):
     return out
 
 
-def summary(points, triangles):
+def summary(points: ArrayLike, triangles: ArrayLike) -> dict[str, float]:
     """Radius-ratio and angle statistics as a flat dict (one pandas row)."""
     rho = radius_ratio(points, triangles)
     ang = angles(points, triangles)

@@ -9,6 +9,7 @@ statuses into exceptions.
 """
 
 import numpy as np
+from numpy.typing import ArrayLike, DTypeLike
 
 from ._cdt import compact, interior_mask, recover_segments
 from ._delaunay import delaunay_kernel
@@ -20,7 +21,7 @@ from .predicates import orient2d, out_of_range, out_of_range_message
 __all__ = ["constrained_delaunay", "delaunay"]
 
 
-def _writable(array, dtype):
+def _writable(array: ArrayLike, dtype: DTypeLike) -> np.ndarray:
     """A contiguous, writable array: numba compiles a separate copy of every
     kernel for read-only arrays (a frozen Mesh's), which doubled the cold
     compile time of the triangulation."""
@@ -28,7 +29,7 @@ def _writable(array, dtype):
     return out if out.flags.writeable else out.copy()
 
 
-def _as_points(points):
+def _as_points(points: ArrayLike) -> np.ndarray:
     P = _writable(points, np.float64)
     if P.ndim != 2 or P.shape[1] != 2:
         raise GeometryError(f"points must be an (N, 2) array, got shape {P.shape}")
@@ -39,7 +40,8 @@ def _as_points(points):
     return P
 
 
-def ghost_delaunay(points):
+def ghost_delaunay(points: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                               int, np.ndarray]:
     """Delaunay triangulation with ghost triangles: (tri, nbr, con, vt, ntri,
     dup_of), arrays sized to capacity with the first ntri rows in use."""
     P = _as_points(points)
@@ -58,7 +60,7 @@ def ghost_delaunay(points):
     return tri, nbr, con, vt, ntri, dup_of
 
 
-def delaunay(points):
+def delaunay(points: ArrayLike) -> np.ndarray:
     """Unconstrained Delaunay triangulation of a point set, (M, 3) int64 CCW.
 
     Exact duplicates are left out of every triangle (as Qhull does).  Raises
@@ -81,7 +83,8 @@ def _crossing_at(P: np.ndarray, S: np.ndarray, s: int, v: int) -> str:
     return f"at vertex {v}"
 
 
-def constrained_delaunay(points, segments):
+def constrained_delaunay(points: ArrayLike, segments: ArrayLike
+                         ) -> tuple[np.ndarray, np.ndarray]:
     """Constrained Delaunay triangulation of the region enclosed by ``segments``
     (paper §2.1 and §3.5): triangles outside the outer loop and inside holes are
     removed by the parity of segments crossed from infinity.
