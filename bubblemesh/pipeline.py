@@ -166,8 +166,9 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterati
     for name, value, top in (("max_iterations", max_iterations, None), ("rings", rings, 6),
                              ("smoothing_rounds", smoothing_rounds, None),
                              ("smoothing_sweeps", smoothing_sweeps, None)):
-        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < (
-                1 if name == "rings" else 0) or (top is not None and value > top):
+        least = 1 if name == "rings" else 0
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not (
+                least <= int(value) <= (top if top is not None else int(value))):
             raise ValueError(f"mesh: {name} must be an integer >= "
                              f"{1 if name == 'rings' else 0}{f' and <= {top}' if top else ''}, "
                              f"got {value!r}")
