@@ -15,6 +15,7 @@ from .domain import Domain
 from .errors import GeometryError, MeshingError
 from .generation import generate
 from .optimization import optimize
+from .pipeline import QualityWarning
 from .quality import radius_ratio
 from .triangulation import constrained_delaunay, delaunay
 
@@ -29,6 +30,7 @@ __all__ = [
     "generate",
     "mesh",
     "OptimizationStats",
+    "QualityWarning",
     "optimize",
     "radius_ratio",
     "read",
@@ -42,6 +44,33 @@ except Exception:  # not installed (running from a checkout)
     __version__ = "0+unknown"
 
 
-def mesh(domain: Domain, *, progress: bool = False, **optimize_options: Any) -> Mesh:
-    """Paper §2 then §3 with the paper's defaults: the optimised mesh."""
-    return optimize(generate(domain, progress=progress), progress=progress, **optimize_options)
+def mesh(domain: Domain, *, size: Any = None, max_area: Any = None, gradation: float = 0.25,
+         paper: bool = False, progress: bool = False, **options: Any) -> Mesh:
+    """Mesh ``domain``: by default the robust mesher (``bubblemesh.pipeline``).
+
+    ``size``: the element size (edge length), a positive number or a
+    vectorised callable ``h(xy: (n, 2)) -> (n,)``; ``max_area``: largest
+    triangle area (as the side of the equilateral triangle of that area,
+    combined with ``size`` by min); ``gradation``: the size field's largest
+    slope.  Without either, the sizes follow the input spacing and feature
+    size.  ``options`` go to :func:`bubblemesh.pipeline.robust_mesh`
+    (``max_iterations``, ``tol``, ``amplification``, ``alpha``, ``rings``,
+    ``smoothing_rounds``, ``smoothing_sweeps``).  Input nodes keep their
+    coordinates bit for bit and come first, loop after loop (the outer loop
+    counter-clockwise), with the nodes added on their segments between them.
+    Corners too sharp for a radius ratio of 0.7 give a
+    :class:`~bubblemesh.pipeline.QualityWarning`, also listed in
+    ``mesh.generation.warnings``.
+
+    ``paper=True``: the paper as published, ``optimize(generate(domain))``
+    with ``options`` passed to :func:`optimize` (``size``, ``max_area`` and
+    ``gradation`` must then be left at their defaults)."""
+    if paper:
+        if size is not None or max_area is not None or gradation != 0.25:
+            raise ValueError("mesh: size, max_area and gradation do not apply with paper=True "
+                             "(the paper's sizes come from the boundary spacing alone)")
+        return optimize(generate(domain, progress=progress), progress=progress, **options)
+    from .pipeline import robust_mesh
+
+    return robust_mesh(domain, size=size, max_area=max_area, gradation=gradation,
+                       progress=progress, **options)

@@ -7,6 +7,12 @@ insertion grown from that triangle (``_cavity``), the new triangles' bubbles
 into the queue; (f) stop when sum A_e >= A_geo (eq. 6), the sum kept with an
 error-free two-sum.  All state lives in the arrays (``state``'s slots), so the
 driver can grow them and call again.
+
+Sized mode (``bubblemesh.mesh``, not the paper): with ``capped`` true, r_e is
+min(eq. 3, ``factor`` h(centroid)) for a size field h passed as ``field``
+(:meth:`bubblemesh.sizing.SizeField.kernel_args`), so eq. 6 populates the domain
+to the field where the boundary alone would ask for fewer nodes.  With
+``capped`` false the kernel computes exactly the paper's eq. 3.
 """
 
 import math
@@ -26,6 +32,7 @@ from ._status import (
 from .bubbles import element_radius, triangle_area
 from .memory import prefetch, unsigned
 from .predicates import orient2d
+from .sizing import cone_at
 
 # integer state slots
 S_NPTS, S_NTRI, S_HEAP, S_INSERTIONS, S_STAMP, S_CAVITY = range(6)
@@ -73,15 +80,18 @@ def _prefetch_third_ring_nodes(R, tri, nbr, t):
 
 
 @njit(cache=True)
-def _bubble(P, R, tri, t, r_e):
+def _bubble(P, R, tri, t, r_e, capped, field, factor, stack):
     """Eq. 3-5 for triangle t: stores r_e and returns D_e (inf for a sliver
-    whose floating-point area is 0: nothing to fill, never split)."""
+    whose floating-point area is 0: nothing to fill, never split).  ``capped``:
+    r_e no larger than ``factor`` times the size field at the centroid."""
     a = unsigned(tri[t, 0])
     b = unsigned(tri[t, 1])
     c = unsigned(tri[t, 2])
-    r, _, _ = element_radius(
+    r, ex, ey = element_radius(
         P[a, 0], P[a, 1], R[a], P[b, 0], P[b, 1], R[b], P[c, 0], P[c, 1], R[c]
     )
+    if capped:
+        r = min(r, factor * cone_at(ex, ey, stack, *field))
     r_e[t] = r
     area = triangle_area(P[a, 0], P[a, 1], P[b, 0], P[b, 1], P[c, 0], P[c, 1])
     if area == 0.0:
@@ -106,11 +116,11 @@ def _accumulate(acc, x):
 
 
 @njit(cache=True)
-def init_queue(P, R, tri, ntri, r_e, density, keys, ids, acc):
+def init_queue(P, R, tri, ntri, r_e, density, keys, ids, acc, capped, field, factor, stack):
     """Step (b): bubbles of the initial triangles, their sum, the queue."""
     size = 0
     for t in range(ntri):
-        density[t] = _bubble(P, R, tri, t, r_e)
+        density[t] = _bubble(P, R, tri, t, r_e, capped, field, factor, stack)
         _accumulate(acc, _bubble_area(r_e, t))
         size = heap_push(keys, ids, size, density[t], t)
     return size
@@ -130,7 +140,7 @@ def _rebuild_queue(ntri, density, keys, ids):
 def insertion_loop(
     P, R, tri, nbr, con, vt, r_e, density, keys, ids,
     state, acc, area_geo, max_insertions, chunk,
-    mark, cav, bnd, newt, vstart,
+    mark, cav, bnd, newt, vstart, capped, field, factor, stack,
 ):
     """Steps (c)-(f) until eq. 6, ``max_insertions``, a full array or ``chunk``
     insertions.  All state lives in the arrays, so the caller can grow them and
@@ -221,7 +231,7 @@ def insertion_loop(
             _prefetch_second_ring(R, tri, nbr, density, nxt)
         for k in range(nb):
             s = newt[k]
-            density[s] = _bubble(P, R, tri, s, r_e)
+            density[s] = _bubble(P, R, tri, s, r_e, capped, field, factor, stack)
             _accumulate(acc, _bubble_area(r_e, s))
             size = heap_push(keys, ids, size, density[s], s)
         if nxt >= 0:

@@ -1,8 +1,12 @@
 """The ``bubblemesh`` command.
 
-``bubblemesh mesh`` runs the paper's two stages on a ``.poly`` boundary:
-Delaunay generation with node and element bubbles (§2) and the
-physically-based optimisation (§3), then reports the radius ratio of eq. 10.
+``bubblemesh mesh`` meshes a ``.poly`` boundary with the robust mesher
+(:func:`bubblemesh.mesh`: a size field from ``--size`` / ``--max-area`` and
+the boundary, §2 and a stable §3), or with ``--paper`` the paper's two stages
+as published: Delaunay generation with node and element bubbles (§2) and the
+physically-based optimisation (§3); ``--no-optimize`` and ``--max-insertions``
+are paper-stage options and imply ``--paper``.  It reports the radius ratio
+of eq. 10.
 ``bubblemesh reproduce`` rebuilds the paper's Figs. 3-6 and the comparison
 with other meshers, ``bubblemesh bench`` times them; both live in the
 repository's ``cases`` package, imported only when asked for.
@@ -154,6 +158,11 @@ def _parser() -> argparse.ArgumentParser:
         "-o", "--output", type=Path, required=True, metavar="OUT",
         help="mesh file; the suffix picks the format (.vtu, .msh, .xdmf, ...; meshio's)",
     )  # fmt: skip
+    mesh.add_argument("--size", type=_positive, metavar="H", help="element size (edge length)")
+    mesh.add_argument("--max-area", type=_positive, metavar="A", help="largest element area")
+    mesh.add_argument(
+        "--paper", action="store_true", help="the paper's §2 + §3 as published (no size control)"
+    )
     mesh.add_argument("--no-optimize", action="store_true", help="stop after generation (paper §2)")
     mesh.add_argument("--plot", type=Path, metavar="PNG", help="also draw the mesh (.png, .pdf)")
     mesh.add_argument(
@@ -194,6 +203,17 @@ def _whole(least: int):
     return convert
 
 
+def _positive(text: str) -> float:
+    """An argparse type: a finite number > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not (value > 0 and value != float("inf")):
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
+    return value
+
+
 def _version() -> str:
     from importlib.metadata import PackageNotFoundError, version
 
@@ -205,6 +225,7 @@ def _version() -> str:
 
 def _run_mesh(args: argparse.Namespace) -> int:
     from bubblemesh import generate, optimize
+    from bubblemesh import mesh as robust
     from bubblemesh.domain import Domain
     from bubblemesh.io import check_mesh_path
     from bubblemesh.quality import summary
@@ -213,9 +234,16 @@ def _run_mesh(args: argparse.Namespace) -> int:
     check_mesh_path(args.output)  # a bad -o or --plot fails now, not after the meshing
     if args.plot is not None:
         _check_plot_path(args.plot)
-    mesh = generate(domain, max_insertions=args.max_insertions)
-    if not args.no_optimize:
-        mesh = optimize(mesh)
+    paper = args.paper or args.no_optimize or args.max_insertions is not None
+    if paper and (args.size is not None or args.max_area is not None):
+        raise UsageError("--size and --max-area apply to the robust mesher, not with --paper, "
+                         "--no-optimize or --max-insertions")
+    if paper:
+        mesh = generate(domain, max_insertions=args.max_insertions)
+        if not args.no_optimize:
+            mesh = optimize(mesh)
+    else:
+        mesh = robust(domain, size=args.size, max_area=args.max_area)
     mesh.write(args.output)
     print(f"nodes: {len(mesh.points)} ({mesh.n_boundary} on the boundary)")
     print(f"elements: {len(mesh.triangles)}")

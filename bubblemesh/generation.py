@@ -40,7 +40,7 @@ from .errors import MeshingError
 from .timing import PhaseClock
 from .triangulation import constrained_delaunay
 
-__all__ = ["generate"]
+__all__ = ["generate", "generate_sized"]
 
 # initial triangle capacity, as a multiple of the expected count (arrays double
 # when full, so this only trades memory against copies), and at most
@@ -95,13 +95,53 @@ def generate(domain, *, max_insertions=None, progress=False):
             isinstance(max_insertions, numbers.Integral) and max_insertions >= 0):
         raise ValueError(f"generate: max_insertions must be an integer >= 0 or None, "
                          f"got {max_insertions!r}")
+    return _generate(domain, max_insertions, progress, None)
+
+
+def generate_sized(domain, size_field, *, max_insertions=None, progress=False):
+    """§2 driven by a size field as well as by the boundary (``bubblemesh.mesh``,
+    not the paper): each element bubble is r_e = min(eq. 3, the eq. 2 radius of
+    an equilateral triangle of side h(centroid)), so eq. 6 fills the domain to
+    the finer of the two.  ``size_field`` is a :class:`bubblemesh.sizing.SizeField`."""
+    from .sizing import SizeField
+
+    if not isinstance(domain, Domain):
+        raise TypeError(f"generate_sized: domain must be a bubblemesh.Domain, got "
+                        f"{type(domain).__name__}")
+    if not isinstance(size_field, SizeField):
+        raise TypeError(f"generate_sized: size_field must be a SizeField, got "
+                        f"{type(size_field).__name__}")
+    if max_insertions is not None and not (
+            isinstance(max_insertions, numbers.Integral) and max_insertions >= 0):
+        raise ValueError(f"generate_sized: max_insertions must be an integer >= 0 or None, "
+                         f"got {max_insertions!r}")
+    return _generate(domain, max_insertions, progress, size_field)
+
+
+def _kernel_field(size_field):
+    """(capped, field arrays, eq. 2 factor, scratch stack, smallest radius) for
+    the kernel; a small dummy field when there is none (the paper's §2)."""
+    from .sizing import _EQUILATERAL_RADIUS, STACK_SIZE, SizeField
+
+    stack = np.empty(STACK_SIZE, np.int64)
+    if size_field is None:
+        dummy = SizeField(np.zeros((1, 2)), np.ones(1), gradation=0.0)
+        return False, dummy.kernel_args(), 0.0, stack, math.inf
+    r_min = _EQUILATERAL_RADIUS * float(size_field.values.min())
+    return True, size_field.kernel_args(), _EQUILATERAL_RADIUS, stack, r_min
+
+
+def _generate(domain, max_insertions, progress, size_field):
+    """§2 of generate / generate_sized (the arguments checked)."""
     clock = PhaseClock()
     points = np.asarray(domain.points, dtype=np.float64)
     tri, nbr = constrained_delaunay(points, domain.segments)  # (a)
     clock.lap("boundary_cdt")
     radii = boundary_radii(points, domain.loops)  # (b) eq. 1-2
+    capped, field, factor, stack, r_field = _kernel_field(size_field)
     area_geo = float(domain.area)
-    bound = _insertion_bound(area_geo, radii)
+    bound = _insertion_bound(area_geo, radii if not capped else
+                             np.minimum(radii, r_field))
     limit = bound if max_insertions is None else min(int(max_insertions), bound)
     if max_insertions is None:
         _check_fits(area_geo, radii)
@@ -118,11 +158,11 @@ def generate(domain, *, max_insertions=None, progress=False):
     state[S_NPTS] = len(points)
     state[S_NTRI] = len(tri)
     state[S_HEAP] = init_queue(ws.P, ws.R, ws.tri, len(tri), ws.r_e, ws.density,
-                               ws.keys, ws.ids, acc)
+                               ws.keys, ws.ids, acc, capped, field, factor, stack)
     bar = _progress_bar(progress, expected // 2)
     clock.lap("setup")
     try:
-        status = _run(ws, state, acc, area_geo, limit, bar)
+        status = _run(ws, state, acc, area_geo, limit, bar, (capped, field, factor, stack))
     finally:
         if bar is not None:
             bar.close()
@@ -143,7 +183,7 @@ def generate(domain, *, max_insertions=None, progress=False):
                 n_boundary=len(domain.points), domain=domain, generation=stats)
 
 
-def _run(ws, state, acc, area_geo, limit, bar):
+def _run(ws, state, acc, area_geo, limit, bar, sizing):
     """Call the kernel until it stops; every call inserts at least one node or
     follows a growth that did, so the loop ends within ``limit`` insertions."""
     chunk = 20000 if bar is not None else 1 << 62
@@ -151,7 +191,7 @@ def _run(ws, state, acc, area_geo, limit, bar):
     while True:
         before = int(state[S_INSERTIONS])
         status = insertion_loop(*ws.kernel_args(), state, acc, area_geo, limit, chunk,
-                                ws.mark, ws.cav, ws.bnd, ws.newt, ws.vstart)
+                                ws.mark, ws.cav, ws.bnd, ws.newt, ws.vstart, *sizing)
         progressed = int(state[S_INSERTIONS]) > before
         if bar is not None:
             bar.update(int(state[S_INSERTIONS]) - before)

@@ -41,7 +41,7 @@ from numba import njit, prange
 
 from bubblemesh.domain import Domain
 
-__all__ = ["SizeField", "as_size_function"]
+__all__ = ["SizeField", "as_size_function", "cone_at", "STACK_SIZE"]
 
 SAMPLING = 0.5  # boundary samples are spaced <= SAMPLING * h
 FEATURE_SLACK = 1.25  # on the boundary h <= FEATURE_SLACK * feature size
@@ -49,6 +49,7 @@ QUADTREE_SAMPLING = 1.0  # quadtree cells have sides <= QUADTREE_SAMPLING * user
 MAX_SOURCES = 2**24  # beyond this the requested sizes are unreasonably small
 _LEAF = 8  # items per tree leaf
 _STACK = 256  # > twice the depth of any tree over < 2**60 items
+STACK_SIZE = _STACK
 _BLOCK = 256  # queries per parallel task (one traversal stack each)
 _EQUILATERAL_RADIUS = math.sqrt(math.sqrt(3.0) / (4.0 * math.pi))  # eq. 2 with l1 = l2 = h
 
@@ -130,36 +131,44 @@ class _Tree:
 # --- cone field: h(x) = min(cap, min_k h_k + g |x - x_k|) ------------------------------
 
 
+@njit(cache=True)
+def cone_at(x, y, stack, px, py, ph, start, end, left, box, least, g, cap):
+    """min(cap, min_k ph[k] + g |(x, y) - p_k|), exactly the minimum over all
+    sources (a node is skipped only when its lower bound, its least h plus g
+    times the distance to its box, cannot beat the best so far).  ``stack``:
+    int64 scratch of length _STACK."""
+    best = cap
+    top = 1
+    stack[0] = 0
+    while top > 0:
+        top -= 1
+        i = stack[top]
+        if least[i] + g * _box_distance(box, i, x, y) >= best:
+            continue
+        if left[i] < 0:
+            for k in range(start[i], end[i]):
+                v = ph[k] + g * math.sqrt((px[k] - x) ** 2 + (py[k] - y) ** 2)
+                best = min(best, v)
+            continue
+        a, b = left[i], left[i] + 1
+        if _box_distance(box, a, x, y) + least[a] < _box_distance(box, b, x, y) + least[b]:
+            a, b = b, a  # the more promising child on top
+        stack[top], stack[top + 1] = a, b
+        top += 2
+    return best
+
+
 @njit(cache=True, parallel=True)
 def _cone_min(q, px, py, ph, start, end, left, box, least, g, cap):
-    """For each query point: min(cap, min_k ph[k] + g |q - p_k|), exactly the
-    minimum over all sources (a node is skipped only when its lower bound, its
-    least h plus g times the distance to its box, cannot beat the best so far)."""
+    """:func:`cone_at` for each query point."""
     n = q.shape[0]
     out = np.empty(n)
     for block in prange((n + _BLOCK - 1) // _BLOCK):
         stack = np.empty(_STACK, np.int64)
         for j in range(block * _BLOCK, min(n, (block + 1) * _BLOCK)):
-            x, y = q[j, 0], q[j, 1]
-            best = cap
-            top = 1
-            stack[0] = 0
-            while top > 0:
-                top -= 1
-                i = stack[top]
-                if least[i] + g * _box_distance(box, i, x, y) >= best:
-                    continue
-                if left[i] < 0:
-                    for k in range(start[i], end[i]):
-                        v = ph[k] + g * math.sqrt((px[k] - x) ** 2 + (py[k] - y) ** 2)
-                        best = min(best, v)
-                    continue
-                a, b = left[i], left[i] + 1
-                if _box_distance(box, a, x, y) + least[a] < _box_distance(box, b, x, y) + least[b]:
-                    a, b = b, a  # the more promising child on top
-                stack[top], stack[top + 1] = a, b
-                top += 2
-            out[j] = best
+            out[j] = cone_at(
+                q[j, 0], q[j, 1], stack, px, py, ph, start, end, left, box, least, g, cap
+            )
     return out
 
 
@@ -341,6 +350,13 @@ class SizeField:
             xy, t.x, t.y, t.value,
             t.start, t.end, t.left, t.box, t.least, self.gradation, self.cap,
         )  # fmt: skip
+
+    def kernel_args(self) -> tuple:
+        """The arrays and numbers :func:`cone_at` takes after its stack, for
+        kernels that evaluate h themselves (x_k, y_k, h_k, the tree, g, cap)."""
+        t = self._tree
+        return (t.x, t.y, t.value, t.start, t.end, t.left, t.box, t.least,
+                float(self.gradation), float(self.cap))
 
     def radius(self, xy) -> np.ndarray:
         """The eq. 2 bubble radius of an equilateral triangle of side h(x)."""

@@ -1,0 +1,306 @@
+"""The robust default mesher behind :func:`bubblemesh.mesh` (the paper's §2 and §3
+made safe for ordinary input; ``paper=True`` runs the paper unchanged).
+
+1. Size: a graded :class:`~bubblemesh.sizing.SizeField` from the input spacing,
+   the feature size and the user's ``size`` / ``max_area``; the boundary is
+   split to it (:func:`~bubblemesh.refinement.refine_boundary`, input nodes kept
+   bit for bit), which makes the *refined boundary* §2.1 assumes.
+2. §2 (:func:`~bubblemesh.generation.generate_sized`): eq. 1-6 with every
+   element bubble capped by the field, so the interior follows the field too.
+3. A stable §3: the eq. 7-8 overlap forces with the node bubbles anchored at
+   their §2 radii (amplified, §3.1; eq. 9 is not applied, so radii cannot
+   drift), stopped when the largest move falls below ``tol`` times the radius;
+   the §3.5 re-triangulation; then quality-guarded smoothing
+   (:mod:`bubblemesh._smoothing`) alternating with re-triangulation.  Final
+   guarantee: the result's smallest radius ratio is never below the §2
+   mesh's; if it were, the nodes of the offending triangles go back to their
+   §2 positions, and as a last resort the §2 mesh itself is smoothed.
+4. Corners sharper than :data:`SHARP_ANGLE` (where no triangle can reach a
+   radius ratio of 0.7) are reported: a :class:`QualityWarning` and the
+   ``warnings`` field of the returned mesh's generation record.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import warnings
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ._forces import move
+from ._inside import boundary_clearance
+from ._mesh import GenerationStats, Mesh, OptimizationStats
+from ._rings import node_adjacency, ring_neighbors, vertex_triangles
+from ._smoothing import compass_polish, guarded_smooth, stars, triangle_quality
+from ._verlet import VerletLists
+from .domain import Domain
+from .errors import GeometryError, MeshingError
+from .generation import generate_sized
+from .refinement import refine_boundary
+from .sizing import SizeField, as_size_function
+from .timing import PhaseClock
+from .triangulation import constrained_delaunay
+
+__all__ = ["QualityWarning", "RobustGenerationStats", "RobustOptimizationStats", "robust_mesh",
+           "corner_angles", "best_corner_ratio", "SHARP_ANGLE"]
+
+
+def best_corner_ratio(theta):
+    """Eq. 10 of the isosceles triangle with apex angle theta (its best at a
+    corner of angle theta): 8 sin(theta / 2) sin^2((pi - theta) / 4)."""
+    theta = np.asarray(theta, dtype=np.float64)
+    return 8.0 * np.sin(theta / 2) * np.sin((np.pi - theta) / 4) ** 2
+
+
+def _sharp_angle(target: float = 0.7) -> float:
+    """The apex angle below which best_corner_ratio < target (bisection)."""
+    lo, hi = 1e-6, math.pi / 3
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if best_corner_ratio(mid) < target else (lo, mid)
+    return hi
+
+
+SHARP_ANGLE = _sharp_angle()  # ~27.2 degrees
+POOR = 0.85  # stars whose worst radius ratio is below this get the compass search
+
+
+class QualityWarning(UserWarning):
+    """The input boundary cannot support a mesh of the usual quality."""
+
+
+@dataclass(frozen=True)
+class RobustGenerationStats(GenerationStats):
+    """§2's record plus what the robust pipeline adds: ``warnings`` (one line
+    per corner too sharp for a radius ratio of 0.7), the input and refined
+    boundary node counts, the size field's smallest and largest source."""
+
+    warnings: tuple[str, ...] = ()
+    input_boundary_nodes: int = 0
+    refined_boundary_nodes: int = 0
+    size_range: tuple[float, float] = (0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class RobustOptimizationStats(OptimizationStats):
+    """§3's record plus: ``converged`` (the ``tol`` test fired),
+    ``smoothing_moves`` (guarded moves taken), ``min_ratio_generation`` and
+    ``min_ratio`` (eq. 10, before and after), ``fallback`` ("none",
+    "reverted" or "generation")."""
+
+    converged: bool = False
+    smoothing_moves: int = 0
+    min_ratio_generation: float = 0.0
+    min_ratio: float = 0.0
+    fallback: str = "none"
+
+
+def corner_angles(domain: Domain) -> np.ndarray:
+    """Interior angle (radians, in (0, 2 pi)) at every node of ``domain``, in
+    the order of ``domain.points`` (the domain lies left of its segments)."""
+    P = np.asarray(domain.points)
+    angles = np.empty(len(P))
+    for ix in domain.loops:
+        v = P[ix]
+        to_prev = np.roll(v, 1, axis=0) - v
+        to_next = np.roll(v, -1, axis=0) - v
+        cross = to_next[:, 0] * to_prev[:, 1] - to_next[:, 1] * to_prev[:, 0]
+        dot = (to_next * to_prev).sum(axis=1)
+        angles[ix] = np.mod(np.arctan2(cross, dot), 2 * np.pi)
+    return angles
+
+
+def _sharp_corner_warnings(domain: Domain) -> tuple[str, ...]:
+    out = []
+    theta = corner_angles(domain)
+    node_loop = np.empty(len(theta), np.int64)
+    for k, ix in enumerate(domain.loops):
+        node_loop[ix] = k
+    for i in np.flatnonzero(theta < SHARP_ANGLE):
+        x, y = domain.points[i]
+        out.append(
+            f"input node {i} at ({x:.6g}, {y:.6g}) (loop {node_loop[i]}) has an angle of "
+            f"{math.degrees(theta[i]):.3g} degrees: no triangle there can have a radius ratio "
+            f"above {float(best_corner_ratio(theta[i])):.3g}")
+    return tuple(out)
+
+
+def _user_size(size, max_area):
+    """The user size as a number, a callable or None: ``size`` combined by min
+    with the side of the equilateral triangle of area ``max_area``."""
+    if max_area is None:
+        return size
+    try:
+        area = float(max_area)
+    except (TypeError, ValueError):
+        raise TypeError(f"mesh: max_area must be a positive number, got "
+                        f"{type(max_area).__name__}") from None
+    if not (math.isfinite(area) and area > 0):
+        raise ValueError(f"mesh: max_area must be finite and > 0, got {max_area!r}")
+    side = math.sqrt(4.0 * area / math.sqrt(3.0))
+    if size is None:
+        return side
+    if callable(size):
+        user = as_size_function(size)
+        return lambda xy: np.minimum(user(xy), side)
+    return min(float(as_size_function(size)(np.zeros((1, 2)))[0]), side)
+
+
+def _check(name, value, ok, expected):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not ok(value):
+        raise ValueError(f"mesh: {name} must be {expected}, got {value!r}")
+
+
+def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterations=200,
+                tol=1e-2, amplification=1.7, alpha=0.2, rings=3, smoothing_rounds=3,
+                smoothing_sweeps=4, progress=False) -> Mesh:
+    """The robust mesher (module docstring); :func:`bubblemesh.mesh` documents
+    the arguments."""
+    if not isinstance(domain, Domain):
+        raise TypeError(f"mesh: domain must be a bubblemesh.Domain, got {type(domain).__name__}")
+    _check("amplification", amplification, lambda v: 0 < v <= 2.0, "in (0, 2]")
+    _check("alpha", alpha, lambda v: 0 < v <= 0.3, "in (0, 0.3]")
+    _check("tol", tol, lambda v: math.isfinite(v) and v >= 0, "finite and >= 0")
+    for name, value, top in (("max_iterations", max_iterations, None), ("rings", rings, 6),
+                             ("smoothing_rounds", smoothing_rounds, None),
+                             ("smoothing_sweeps", smoothing_sweeps, None)):
+        least = 1 if name == "rings" else 0
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not (
+                least <= int(value) <= (top if top is not None else int(value))):
+            raise ValueError(f"mesh: {name} must be an integer >= "
+                             f"{1 if name == 'rings' else 0}{f' and <= {top}' if top else ''}, "
+                             f"got {value!r}")
+    clock = PhaseClock()
+    try:
+        field = SizeField.from_domain(domain, size=_user_size(size, max_area),
+                                      gradation=gradation)
+        refined = refine_boundary(domain, field)
+    except (TypeError, ValueError) as error:
+        raise type(error)(f"mesh: {error}") from None
+    try:
+        fine = refined.to_domain()
+    except GeometryError as error:
+        raise GeometryError(f"mesh: the refined boundary is not valid: {error}") from None
+    clock.lap("sizing")
+    generated = generate_sized(fine, field, progress=progress)
+    notes = _sharp_corner_warnings(domain)
+    for note in notes:
+        warnings.warn(note, QualityWarning, stacklevel=3)
+    gen = RobustGenerationStats(
+        **{k: getattr(generated.generation, k) for k in GenerationStats.__dataclass_fields__},
+        warnings=notes, input_boundary_nodes=len(domain.points),
+        refined_boundary_nodes=len(fine.points),
+        size_range=(float(field.values.min()), float(field.values.max())))
+    generated = replace(generated, generation=gen)
+    clock.lap("generation")
+    return stable_optimize(generated, max_iterations=int(max_iterations), tol=float(tol),
+                           amplification=float(amplification), alpha=float(alpha),
+                           rings=int(rings), smoothing_rounds=int(smoothing_rounds),
+                           smoothing_sweeps=int(smoothing_sweeps), clock=clock)
+
+
+def _forces(mesh, R, max_iterations, tol, alpha, rings):
+    """Eq. 7-8 with fixed radii R until the largest relative move < tol.
+    Returns (positions, iterations, last largest move, blocked moves, builds)."""
+    n_b = mesh.n_boundary
+    P0 = np.ascontiguousarray(mesh.points)
+    tri0 = np.ascontiguousarray(mesh.triangles)
+    nbr0 = np.ascontiguousarray(mesh.neighbors)
+    n = len(P0)
+    ring_ptr, ring_idx = ring_neighbors(*node_adjacency(tri0, nbr0, n), n, rings)
+    X, Xn = P0.copy(), P0.copy()
+    home = vertex_triangles(tri0, n)
+    clearance = boundary_clearance(P0, np.asarray(mesh.segments), n_b,
+                                   reach=4.0 * float(R.max(initial=0.0)))
+    lists = VerletLists(ring_ptr, ring_idx, n_b, 0.3)
+    expired, iterations, largest, blocked = True, 0, 0.0, 0
+    while iterations < max_iterations:
+        iterations += 1
+        if expired:
+            lists.build(X, R)
+        expired, stuck, largest = move(X, R, Xn, home, *lists.arrays, False, n_b, alpha, P0,
+                                       tri0, nbr0, clearance, lists.X0, lists.R0, lists.skin)
+        expired = expired > 0
+        blocked += stuck
+        X, Xn = Xn, X
+        if largest < tol:
+            break
+    return X, iterations, float(largest), int(blocked), lists.builds
+
+
+def _triangulate(X, segments):
+    try:
+        return constrained_delaunay(X, segments)
+    except GeometryError as error:
+        raise MeshingError(f"mesh: re-triangulation failed: {error}") from error
+
+
+def _polish(X, triangles, neighbors, segments, n_b, rounds, sweeps, movable):
+    """Guarded smoothing alternating with re-triangulation; a re-triangulation
+    that would lower the smallest radius ratio is not taken (the smoothed
+    connectivity stays, valid by construction).  X is updated in place."""
+    moves = 0
+    for _ in range(rounds):
+        ptr, idx = stars(triangles, len(X))
+        taken = guarded_smooth(X, triangles, ptr, idx, n_b, sweeps, movable)
+        taken += compass_polish(X, triangles, ptr, idx, n_b, POOR, movable)
+        moves += taken
+        if taken == 0:
+            break
+        tri, nbr = _triangulate(X, segments)
+        if triangle_quality(X, tri).min() >= triangle_quality(X, triangles).min():
+            triangles, neighbors = tri, nbr
+    return triangles, neighbors, moves
+
+
+def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, alpha=0.1,
+                    rings=3, smoothing_rounds=3, smoothing_sweeps=4, clock=None) -> Mesh:
+    """Step 3 of the module docstring on a §2 mesh; the result's smallest eq. 10
+    radius ratio is never below ``mesh``'s."""
+    clock = clock or PhaseClock()
+    n_b, n = mesh.n_boundary, len(mesh.points)
+    segments = np.asarray(mesh.segments)
+    P0 = np.array(mesh.points)
+    q0 = float(triangle_quality(P0, np.asarray(mesh.triangles)).min(initial=1.0))
+    R = np.asarray(mesh.radii, dtype=np.float64) * amplification
+    X, iterations, largest, blocked, builds = _forces(mesh, R, max_iterations, tol, alpha, rings)
+    clock.lap("forces")
+    triangles, neighbors = _triangulate(X, segments)
+    movable = np.ones(n, dtype=np.bool_)
+    triangles, neighbors, moves = _polish(X, triangles, neighbors, segments, n_b,
+                                          smoothing_rounds, smoothing_sweeps, movable)
+    fallback = "none"
+    for _ in range(8):  # the guarantee: revert the nodes of triangles below q0
+        q = triangle_quality(X, triangles)
+        bad = q < q0
+        if not bad.any():
+            break
+        fallback = "reverted"
+        nodes = np.unique(triangles[bad])
+        nodes = nodes[nodes >= n_b]
+        if not len(nodes) or not movable[nodes].any():
+            break
+        X[nodes] = P0[nodes]
+        movable[nodes] = False
+        triangles, neighbors = _triangulate(X, segments)
+    if triangle_quality(X, triangles).min(initial=1.0) < q0:
+        fallback = "generation"  # the §2 mesh, smoothed: never worse by construction
+        X = P0.copy()
+        triangles = np.array(mesh.triangles)
+        neighbors = np.array(mesh.neighbors)
+        movable[:] = True
+        triangles, neighbors, moves = _polish(X, triangles, neighbors, segments, n_b,
+                                              smoothing_rounds, smoothing_sweeps, movable)
+    clock.lap("smoothing")
+    q_final = float(triangle_quality(X, triangles).min(initial=1.0))
+    stats = RobustOptimizationStats(
+        iterations=iterations, max_displacement=largest, blocked_moves=blocked,
+        list_builds=builds, list_layouts=0, amplification=amplification, rings=rings,
+        alpha=alpha, seconds=clock.total(), phases=dict(clock.seconds),
+        converged=largest < tol, smoothing_moves=int(moves), min_ratio_generation=q0,
+        min_ratio=q_final, fallback=fallback)
+    return Mesh(points=X, triangles=triangles, neighbors=neighbors, radii=R, segments=segments,
+                n_boundary=n_b, domain=mesh.domain, generation=mesh.generation,
+                optimization=stats)

@@ -1,0 +1,228 @@
+"""The robust mesher bm.mesh (bubblemesh.pipeline): valid, conforming meshes on
+corner-only polygons, input nodes kept bit for bit, the never-worse guarantee
+of the stable §3, size control, sharp-corner warnings, paper mode unchanged.
+
+Oracles: verification/oracles.py (exact orientation, exact point-in-polygon,
+fsum areas, the radius ratio from the classical formulas), not the pipeline."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import oracles as O
+import pytest
+import strategies as S
+from hypothesis import given, note
+from hypothesis import strategies as st
+
+import bubblemesh as bm
+from bubblemesh import pipeline
+from bubblemesh.generation import generate_sized
+from bubblemesh.refinement import refine_boundary
+from bubblemesh.sizing import SizeField
+
+
+@st.composite
+def corner_domains(draw, max_holes: int = 3):
+    """A star polygon given by its 3-9 corners only, with 0-3 corner-only holes
+    (triangles or quadrilaterals, each inside its own disk in the inscribed disk)."""
+    n = draw(st.integers(3, 9))
+    corners = S._star((0.0, 0.0), 1.0, draw(S._angles(n)),
+                      draw(st.lists(st.floats(0.55, 1.0), min_size=n, max_size=n)))
+    rho = 0.95 * S._min_edge_distance(corners)
+    k = draw(st.integers(0, max_holes))
+    loops = [corners]
+    for i in range(k):
+        ring_r = 0.0 if k == 1 else rho / 2
+        r_max = 0.6 * rho if k == 1 else 0.85 * min(rho / 2, 0.5 * rho * math.sin(math.pi / k))
+        c = (ring_r * math.cos(2 * math.pi * i / max(k, 1)),
+             ring_r * math.sin(2 * math.pi * i / max(k, 1)))
+        m = draw(st.integers(3, 4))
+        loops.append(S._star(c, r_max * draw(st.floats(0.4, 1.0)), draw(S._angles(m)),
+                             [1.0] * m))
+    return [np.ascontiguousarray(lp) for lp in loops]
+
+
+def _valid_and_conforming(m, domain):
+    O.check_valid(m.points, m.triangles, m.neighbors)
+    O.check_conforming(m.points, m.triangles, m.segments, area=domain.area, rel=1e-9)
+
+
+def _keeps_input_nodes(m, domain):
+    """Every input node is a boundary node of the mesh, bit for bit."""
+    have = {p.tobytes() for p in np.asarray(m.points[: m.n_boundary])}
+    missing = [tuple(p) for p in np.asarray(domain.points) if p.tobytes() not in have]
+    assert not missing, f"input nodes not kept bitwise: {missing[:3]}"
+
+
+@given(corner_domains(), st.sampled_from([None, 0.3, 0.15]))
+def test_corner_only_domains_mesh_valid_and_conforming(loops, size):
+    domain = bm.Domain.from_loops(loops)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", bm.QualityWarning)
+        m = bm.mesh(domain, size=size, max_iterations=60)
+    note(f"{len(m.triangles)} triangles")
+    _valid_and_conforming(m, domain)
+    _keeps_input_nodes(m, domain)
+    q = O.radius_ratio_reference(m.points, m.triangles)
+    assert q.min() > 0.0  # never a degenerate element
+
+
+@given(corner_domains(max_holes=2), st.sampled_from([0.3, 0.2]), st.integers(0, 80))
+def test_stable_optimization_is_never_worse_than_generation(loops, size, iterations):
+    domain = bm.Domain.from_loops(loops)
+    field = SizeField.from_domain(domain, size=size)
+    generated = generate_sized(refine_boundary(domain, field).to_domain(), field)
+    out = pipeline.stable_optimize(generated, max_iterations=iterations)
+    before = O.radius_ratio_reference(generated.points, generated.triangles).min()
+    after = O.radius_ratio_reference(out.points, out.triangles).min()
+    assert after >= before * (1 - 1e-12), (before, after)
+    np.testing.assert_array_equal(out.points[: out.n_boundary],
+                                  generated.points[: generated.n_boundary])
+    _valid_and_conforming(out, generated.domain)
+
+
+def _edge_lengths(m):
+    e = np.vstack([m.triangles[:, [0, 1]], m.triangles[:, [1, 2]], m.triangles[:, [2, 0]]])
+    e = np.unique(np.sort(e, axis=1), axis=0)
+    p = np.asarray(m.points)
+    return e, np.hypot(*(p[e[:, 0]] - p[e[:, 1]]).T)
+
+
+def test_constant_size_is_honoured_on_a_corner_only_square():
+    h = 0.05
+    m = bm.mesh(bm.Domain.from_loops([[(0, 0), (1, 0), (1, 1), (0, 1)]]), size=h)
+    _, length = _edge_lengths(m)
+    inside = np.mean((length >= 0.8 * h) & (length <= 1.25 * h))
+    assert inside >= 0.95, inside
+
+
+def test_a_size_function_smaller_in_the_middle_is_honoured():
+    def h(xy):
+        return 0.03 + 0.12 * np.hypot(xy[:, 0] - 0.5, xy[:, 1] - 0.5)
+
+    m = bm.mesh(bm.Domain.from_loops([[(0, 0), (1, 0), (1, 1), (0, 1)]]), size=h)
+    e, length = _edge_lengths(m)
+    p = np.asarray(m.points)
+    ratio = length / h(0.5 * (p[e[:, 0]] + p[e[:, 1]]))
+    assert np.mean((ratio >= 0.8) & (ratio <= 1.25)) >= 0.9, np.percentile(ratio, [5, 50, 95])
+    centre = np.hypot(p[:, 0] - 0.5, p[:, 1] - 0.5) < 0.1
+    assert centre.sum() >= 0.5 * math.pi * 0.1**2 / (math.sqrt(3) / 4 * 0.045**2) / 2
+
+
+def test_max_area_bounds_the_triangle_areas_roughly():
+    area = 0.002
+    m = bm.mesh(bm.Domain.from_loops([[(0, 0), (1, 0), (1, 1), (0, 1)]]), max_area=area)
+    areas = O.triangle_areas(m.points, m.triangles)
+    assert np.median(areas) <= area and areas.max() <= 2.0 * area
+
+
+def test_sharp_corner_is_reported_and_a_square_is_not():
+    thin = [(0, 0), (1, 0), (1, math.tan(math.radians(10)))]  # a 10 degree corner at (0, 0)
+    with pytest.warns(bm.QualityWarning, match="10 degrees"):
+        m = bm.mesh(bm.Domain.from_loops([thin]))
+    assert len(m.generation.warnings) == 1
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", bm.QualityWarning)
+        m = bm.mesh(bm.Domain.from_loops([[(0, 0), (1, 0), (1, 1), (0, 1)]]))
+    assert m.generation.warnings == ()
+
+
+def test_best_corner_ratio_matches_the_isosceles_triangle():
+    theta = np.radians([10.0, 27.0, 60.0, 90.0])
+    apex = np.column_stack([np.zeros(4), np.zeros(4)])
+    left = np.column_stack([np.cos(-theta / 2), np.sin(-theta / 2)])
+    right = np.column_stack([np.cos(theta / 2), np.sin(theta / 2)])
+    pts = np.vstack([apex[:1], left, right])
+    tris = np.array([[0, 1 + k, 5 + k] for k in range(4)])
+    np.testing.assert_allclose(pipeline.best_corner_ratio(theta),
+                               O.radius_ratio_reference(pts, tris), rtol=1e-12)
+    assert pipeline.best_corner_ratio(pipeline.SHARP_ANGLE) == pytest.approx(0.7, abs=1e-9)
+
+
+def test_paper_mode_is_generate_then_optimize_bit_for_bit():
+    domain = bm.Domain.from_loops(list(S.square_with_hole().loops))
+    a = bm.mesh(domain, paper=True)
+    b = bm.optimize(bm.generate(domain))
+    for name in ("points", "triangles", "neighbors", "radii"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    with pytest.raises(ValueError, match="paper=True"):
+        bm.mesh(domain, paper=True, size=0.1)
+
+
+@pytest.mark.parametrize("kwargs, error", [
+    (dict(max_area=-1.0), ValueError), (dict(max_area="x"), TypeError),
+    (dict(size=0.0), ValueError), (dict(max_iterations=-1), ValueError),
+    (dict(alpha=0.0), ValueError), (dict(gradation=-0.1), ValueError),
+])
+def test_bad_arguments_are_bubblemesh_errors(kwargs, error):
+    with pytest.raises(error, match="mesh"):
+        bm.mesh(bm.Domain.from_loops([[(0, 0), (1, 0), (1, 1), (0, 1)]]), **kwargs)
+
+
+def test_cli_mesh_size_and_paper(tmp_path):
+    from bubblemesh.cli import main
+
+    poly = tmp_path / "sq.poly"
+    poly.write_text("4 2 0 0\n1 0 0\n2 1 0\n3 1 1\n4 0 1\n4 0\n1 1 2\n2 2 3\n3 3 4\n4 4 1\n0\n")
+    out = tmp_path / "sq.vtu"
+    assert main(["mesh", str(poly), "-o", str(out), "--size", "0.1"]) == 0
+    fine = bm.read(out)
+    assert main(["mesh", str(poly), "-o", str(out), "--paper"]) == 0
+    coarse = bm.read(out)
+    assert len(fine.triangles) > 10 * len(coarse.triangles)
+    assert main(["mesh", str(poly), "-o", str(out), "--paper", "--size", "0.1"]) == 2
+
+
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_the_guarantee_holds_when_the_forces_go_wrong(monkeypatch_loops, seed):
+    """Forces replaced by random jumps of up to 3 local sizes (clipped into the
+    domain's box): the result is still valid and never below the §2 minimum."""
+    domain = bm.Domain.from_loops(monkeypatch_loops)
+    field = SizeField.from_domain(domain, size=0.25)
+    generated = generate_sized(refine_boundary(domain, field).to_domain(), field)
+    rng = np.random.default_rng(seed)
+    original = pipeline._forces
+
+    def wild(mesh, R, *args):
+        X = np.array(mesh.points)
+        inner = slice(mesh.n_boundary, None)
+        X[inner] += rng.uniform(-3, 3, X[inner].shape) * R[inner, None]
+        X[inner] = np.clip(X[inner], X[: mesh.n_boundary].min(0), X[: mesh.n_boundary].max(0))
+        return X, 1, 0.0, 0, 1
+
+    pipeline._forces = wild
+    try:
+        out = pipeline.stable_optimize(generated)
+    except bm.MeshingError:
+        return  # two jumped nodes met or left the domain: reported, never a bad mesh
+    finally:
+        pipeline._forces = original
+    note(out.optimization.fallback)
+    before = O.radius_ratio_reference(generated.points, generated.triangles).min()
+    after = O.radius_ratio_reference(out.points, out.triangles).min()
+    assert after >= before * (1 - 1e-12), (before, after)
+    _valid_and_conforming(out, generated.domain)
+
+
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_guarded_smoothing_never_lowers_the_minimum_nor_inverts(loops, seed):
+    from bubblemesh._smoothing import compass_polish, guarded_smooth, stars
+
+    domain = bm.Domain.from_loops(loops)
+    field = SizeField.from_domain(domain, size=0.2)
+    m = generate_sized(refine_boundary(domain, field).to_domain(), field)
+    X = np.array(m.points)
+    tri = np.array(m.triangles)
+    rng = np.random.default_rng(seed)
+    movable = rng.random(len(X)) < 0.7
+    before = O.radius_ratio_reference(X, tri).min()
+    ptr, idx = stars(tri, len(X))
+    guarded_smooth(X, tri, ptr, idx, m.n_boundary, 3, movable)
+    compass_polish(X, tri, ptr, idx, m.n_boundary, 0.9, movable)
+    O.check_valid(X, tri)
+    assert O.radius_ratio_reference(X, tri).min() >= before * (1 - 1e-12)
+    np.testing.assert_array_equal(X[~movable], np.asarray(m.points)[~movable])
+    np.testing.assert_array_equal(X[: m.n_boundary], np.asarray(m.points)[: m.n_boundary])
