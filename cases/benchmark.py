@@ -100,7 +100,7 @@ def _child_bubblemesh(n, repeats):
     import bubblemesh as bm
 
     for _ in range(2):  # warm-up: load/compile every kernel (a 16-node disk left some paths cold)
-        bm.mesh(bm.Domain.from_loops(_disk(64)))
+        bm.mesh(bm.Domain.from_loops(_disk(64)), paper=True)
     base = _rss_mb()
     dom = bm.Domain.from_loops(_disk(n))
     gen = []
@@ -195,7 +195,7 @@ def _child_iterations(n, repeats):
     the paper leaves the count open ("if more iterations are needed")."""
     import bubblemesh as bm
 
-    bm.mesh(bm.Domain.from_loops(_disk(64)))
+    bm.mesh(bm.Domain.from_loops(_disk(64)), paper=True)
     dom = bm.Domain.from_loops(_disk(n))
     rows = []
     for k in ITERATIONS:
@@ -203,7 +203,7 @@ def _child_iterations(n, repeats):
         for _ in range(repeats):
             o = None
             t0 = time.perf_counter()
-            o = bm.mesh(dom, max_iterations=k, tol=0.0)
+            o = bm.mesh(dom, paper=True, max_iterations=k, tol=0.0)
             best = min(best, time.perf_counter() - t0)
         rho = o.quality()
         rows.append(dict(iterations=k, elements=len(o.triangles), seconds=best,
@@ -287,7 +287,7 @@ def _threading_info() -> dict:
     environment variables that change them."""
     code = (
         "import bubblemesh as bm, numba; from cases.geometry import circle;"
-        "bm.mesh(bm.Domain.from_loops([circle((0,0),1,16)]));"
+        "bm.mesh(bm.Domain.from_loops([circle((0,0),1,16)]), paper=True);"
         "print(numba.threading_layer(), numba.get_num_threads())"
     )
     root = str(Path(__file__).resolve().parent.parent)
@@ -323,7 +323,7 @@ def compile_times(timeout: float = 900) -> dict:
         "import time; t0=time.perf_counter(); import bubblemesh as bm; from cases.geometry import "
         "circle;"
         "t1=time.perf_counter(); "
-        "bm.mesh(bm.Domain.from_loops([circle((0,0),1,16)]));"
+        "bm.mesh(bm.Domain.from_loops([circle((0,0),1,16)]), paper=True);"
         "t2=time.perf_counter(); print(t1-t0, t2-t1)"
     )
     root = str(Path(__file__).resolve().parent.parent)

@@ -9,7 +9,8 @@ Kinds of case: polygons with 0-3 holes on a decimal grid (0.1), the same
 jittered by a few ulps, offset far from the origin (1e6 ... 1e15), scaled
 (1e-8 ... 1e8), and mutated Triangle ``.poly`` texts.  A case passes when it
 gives a valid, conforming mesh (the exact oracles) or a bubblemesh exception
-(GeometryError, MeshingError; TypeError or ValueError for misuse).  The
+(GeometryError, MeshingError; TypeError or ValueError for misuse), in paper
+mode and with the default (refining) mesher.  The
 worker is restarted after a crash or a time-out.
 """
 
@@ -94,9 +95,31 @@ def _mutated_poly(rng, loops) -> str:
 # --- the worker: one case per line on stdin, one JSON result per line on stdout -----
 
 
-def _run_case(case: dict) -> dict:
+def check_against_input(mesh, domain) -> str:
+    """'' if ``mesh`` is a valid, conforming mesh of ``domain`` (its boundary
+    possibly refined: conformity to ``mesh.domain``, the input's area, every
+    input node present bit for bit); else what is wrong.  AssertionError from
+    the oracles propagates."""
     import oracles as O
 
+    O.check_valid(mesh.points, mesh.triangles, mesh.neighbors)
+    O.check_conforming(mesh.points, mesh.triangles, mesh.domain.segments, rel=1e-9)
+    # a refined boundary node can sit within an ulp of its input segment (no
+    # float point lies on it exactly): the enclosed area moves by at most that
+    # much times the perimeter
+    area = O.domain_area(domain.points, domain.loops)
+    refined = O.domain_area(mesh.domain.points, mesh.domain.loops)
+    ends = domain.points[domain.segments]
+    perimeter = float(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1).sum())
+    slack = 2.0 * perimeter * float(np.spacing(np.abs(domain.points).max()))
+    if abs(refined - area) > slack + 1e-12 * area:
+        return f"the refined boundary encloses {refined!r}, the input {area!r}"
+    boundary = {tuple(p) for p in mesh.points[: mesh.n_boundary].tolist()}
+    missing = [i for i, p in enumerate(domain.points.tolist()) if tuple(p) not in boundary]
+    return f"input nodes {missing[:5]} are not boundary nodes of the mesh" if missing else ""
+
+
+def _run_case(case: dict) -> dict:
     import bubblemesh as bm
 
     try:
@@ -110,11 +133,11 @@ def _run_case(case: dict) -> dict:
                 domain = bm.Domain.from_poly(path)
         else:
             domain = bm.Domain.from_loops([np.array(loop) for loop in case["loops"]])
-        mesh = bm.mesh(domain)
-        O.check_valid(mesh.points, mesh.triangles, mesh.neighbors)
-        O.check_conforming(mesh.points, mesh.triangles, domain.segments, rel=1e-9)
-        if not np.array_equal(mesh.points[: mesh.n_boundary], domain.points):
-            return {"outcome": "invalid", "detail": "boundary nodes moved"}
+        for paper in (True, False):
+            mesh = bm.mesh(domain, paper=paper)
+            problem = check_against_input(mesh, domain)
+            if problem:
+                return {"outcome": "invalid", "detail": f"paper={paper}: {problem}"}
         return {"outcome": "mesh", "triangles": len(mesh.triangles)}
     except AssertionError as error:  # an oracle found the mesh invalid
         return {"outcome": "invalid", "detail": str(error)[:300]}
