@@ -138,11 +138,11 @@ def test_gmsh_mesh_file_is_valid_and_conforming(tmp_path):
     pts, tri = verify.read_mesh(tmp_path / "sq.msh")
     bad_local = 0
     opp = {}
-    for t, r in enumerate(tri.tolist()):
+    for r in tri.tolist():
         for i in range(3):
             opp[(r[(i + 1) % 3], r[(i + 2) % 3])] = r[i]
     on_boundary = {tuple(sorted(e)) for c in report.splits.values() for e in zip(c, c[1:])}
-    for t, r in enumerate(tri.tolist()):
+    for r in tri.tolist():
         for i in range(3):
             a, b = r[(i + 1) % 3], r[(i + 2) % 3]
             if (b, a) in opp and tuple(sorted((a, b))) not in on_boundary:
@@ -184,10 +184,11 @@ def test_removed_triangle_names_the_hole_edges():
 def test_removed_boundary_triangle_loses_its_segment():
     pts, tri = _triangle_mesh("pYY")
     seg_edges = {tuple(sorted(s)) for s in SEGMENTS.tolist()}
-    for k, r in enumerate(tri.tolist()):
-        mine = {tuple(sorted((r[i], r[(i + 1) % 3]))) for i in range(3)} & seg_edges
-        if mine:
-            break
+    def on_segments(r):
+        return {tuple(sorted((r[i], r[(i + 1) % 3]))) for i in range(3)} & seg_edges
+
+    k = next(t for t, r in enumerate(tri.tolist()) if on_segments(r))
+    mine = on_segments(tri[k].tolist())
     report = verify.check(pts, np.delete(tri, k, axis=0), SEGMENTS, SQUARE, holes=HOLE)
     lost = {v.segment for v in report.of_kind("missing_segment")}
     want = {i for i, s in enumerate(SEGMENTS.tolist()) if tuple(sorted(s)) in mine}

@@ -118,7 +118,7 @@ def float_crossings(q, p1, p2, delta):
 def exact_crossings(Q, segs) -> tuple[list[int], bool]:
     """Exact: indices of segments (pairs of integer points) the rightward ray
     from integer point Q crosses, and whether Q lies on one of them."""
-    out = []
+    out: list[int] = []
     for s, (p1, p2) in enumerate(segs):
         o = orient_int(p1, p2, Q)
         if (o == 0 and min(p1[0], p2[0]) <= Q[0] <= max(p1[0], p2[0])

@@ -94,7 +94,7 @@ class Report:
 
     def to_frame(self):
         """A pandas DataFrame, one row per violation kept."""
-        import pandas as pd
+        import pandas as pd  # type: ignore[import-untyped]
 
         columns = ["kind", "triangle", "edge_u", "edge_v", "node", "segment", "message"]
         frame = pd.DataFrame([v.as_row() for v in self.violations], columns=columns)
@@ -105,7 +105,8 @@ class Report:
     def summary(self, examples: int = 3) -> str:
         """One screen of text: verdict, checks run, counts per kind, quality."""
         lines = [f"mesh check: {'OK' if self.ok else 'VIOLATIONS FOUND'}"]
-        facts = ", ".join(f"{k} {v}" for k, v in self.facts.items() if not isinstance(v, dict))
+        facts = ", ".join(f"{k} {v:.10g}" if isinstance(v, float) else f"{k} {v}"
+                          for k, v in self.facts.items())
         if facts:
             lines.append(f"  {facts}")
         for name, state in self.checks.items():
