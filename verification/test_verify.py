@@ -358,3 +358,22 @@ print("isolated ok")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          timeout=120)
     assert out.returncode == 0 and "isolated ok" in out.stdout, out.stderr
+
+
+@pytest.mark.peers
+def test_centroid_location_in_small_batches_equals_exact(monkeypatch):
+    """The banded float crossing test, forced into many tiny batches, agrees
+    with the all-exact location on Triangle's mesh of the convex hull (holes
+    filled, so centroids fall inside, in the hole and outside)."""
+    from bubblemesh.verify import conform, domain
+
+    triangle = pytest.importorskip("triangle")
+    out = triangle.triangulate(dict(vertices=SQUARE, segments=SEGMENTS), "pcq30a0.01")
+    pts, tri = out["vertices"], out["triangles"].astype(np.int64)
+    E = ExactPoints(pts)
+    B = domain.Boundary(E, SEGMENTS)
+    monkeypatch.setattr(domain, "_MAX_PAIRS", 7)
+    fast = conform.locate_centroids(E, tri, B)
+    exact = conform.locate_centroids(E, tri, B, exact=True)
+    assert np.array_equal(fast, exact)
+    assert set(fast.tolist()) == {1, -1}  # the hole's triangles are outside
