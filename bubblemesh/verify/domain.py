@@ -1,0 +1,235 @@
+"""The input boundary as a domain: loops, nesting, exact area, point location.
+
+The domain is the set of points enclosed by an odd number of boundary loops
+(the even-odd rule): loops at even nesting depth are outer boundaries, at odd
+depth hole boundaries.  This is Triangle's domain when every hole has a hole
+point.  Internal constraint segments (triangles on both sides) are not
+supported: the boundary must be closed loops, each node on exactly two
+segments.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+import numpy as np
+
+from bubblemesh.errors import GeometryError
+
+from .exact import ExactPoints, orient_int, point_in_polygon, signed_area_exact
+
+_EPS = np.finfo(np.float64).eps
+_MAX_PAIRS = 4_000_000  # (query, segment) pairs evaluated per numpy batch
+
+
+def chain_loops(segments: np.ndarray, oriented: bool) -> list[list[int]]:
+    """Closed loops of node ids from segments (K, 2).
+
+    ``oriented``: each segment runs a -> b and every node starts one segment
+    and ends one; otherwise every node is on exactly two segments.  Raises
+    GeometryError naming the node where the segments do not close.
+    """
+    seg = np.asarray(segments, dtype=np.int64).reshape(-1, 2).tolist()
+    nbr: dict[int, list[int]] = {}
+    for a, b in seg:
+        if a == b:
+            raise GeometryError(f"segment ({a}, {b}) has zero length")
+        nbr.setdefault(a, []).append(b)
+        if not oriented:
+            nbr.setdefault(b, []).append(a)
+    for node, out in nbr.items():
+        if len(out) != (1 if oriented else 2):
+            raise GeometryError(
+                f"segments do not form closed loops: node {node} starts {len(out)} segments"
+                if oriented
+                else f"segments do not form closed loops: node {node} is on {len(out)} segments"
+                " (internal constraints and open chains are not supported)"
+            )
+    loops, seen = [], set()
+    for a, _ in seg:
+        if a in seen:
+            continue
+        loop, prev, x = [a], -1, a
+        seen.add(a)
+        for _ in range(len(seg)):  # bounded: a loop has at most K nodes
+            nxt = nbr[x][0] if oriented or nbr[x][0] != prev else nbr[x][1]
+            if nxt == a:
+                break
+            if nxt in seen:
+                raise GeometryError(f"segments do not form simple loops (node {nxt})")
+            prev, x = x, nxt
+            seen.add(x)
+            loop.append(x)
+        loops.append(loop)
+    return loops
+
+
+def _band_pairs(qy_sorted, lo_y, hi_y):
+    """(query position, segment) pairs with the query's y in the segment's band."""
+    lo = np.searchsorted(qy_sorted, lo_y, side="left")
+    hi = np.searchsorted(qy_sorted, hi_y, side="right")
+    counts = hi - lo
+    seg = np.repeat(np.arange(len(lo_y)), counts)
+    start = np.repeat(lo - np.concatenate([[0], np.cumsum(counts)[:-1]]), counts)
+    return np.arange(len(seg)) + start, seg
+
+
+def float_crossings(q, p1, p2, delta):
+    """Rightward-ray crossings in float, with the uncertain queries flagged.
+
+    q (Q, 2) query points known within ``delta`` per coordinate; segments
+    p1 -> p2 (S, 2) exact.  Returns (crossing query ids, crossing segment ids,
+    uncertain mask over Q).  A query is certain when every decision about it
+    clears its error bound (the bound of oracles' centroid locator)."""
+    order = np.argsort(q[:, 1], kind="stable")
+    qy_sorted = q[order, 1]
+    uncertain = np.zeros(len(q), bool)
+    hits_q, hits_s = [], []
+    lo_y = np.minimum(p1[:, 1], p2[:, 1]) - 2 * delta
+    hi_y = np.maximum(p1[:, 1], p2[:, 1]) + 2 * delta
+    counts = np.searchsorted(qy_sorted, hi_y, "right") - np.searchsorted(qy_sorted, lo_y, "left")
+    bounds = np.searchsorted(np.cumsum(counts), np.arange(1, counts.sum() // _MAX_PAIRS + 1)
+                             * _MAX_PAIRS)
+    for chunk in np.split(np.arange(len(p1)), np.unique(bounds)):
+        if not len(chunk):
+            continue
+        pos, s = _band_pairs(qy_sorted, lo_y[chunk], hi_y[chunk])
+        s = chunk[s]
+        k = order[pos]
+        a, b = p1[s], p2[s]
+        qx, qy = q[k, 0], q[k, 1]
+        dy1, dy2 = a[:, 1] - qy, b[:, 1] - qy
+        unsure = (np.abs(dy1) <= delta) | (np.abs(dy2) <= delta)
+        straddle = (a[:, 1] > qy) != (b[:, 1] > qy)
+        ex, ey = b[:, 0] - a[:, 0], b[:, 1] - a[:, 1]
+        u, w = ex * (qy - a[:, 1]), ey * (qx - a[:, 0])
+        o = u - w
+        err = 2 * (np.abs(ex) + np.abs(ey)) * delta + 4 * _EPS * (np.abs(u) + np.abs(w)) + 1e-300
+        unsure |= straddle & (np.abs(o) <= err)
+        uncertain[k[unsure]] = True
+        cross = straddle & ((o > 0) == (b[:, 1] > a[:, 1]))
+        hits_q.append(k[cross])
+        hits_s.append(s[cross])
+    empty = np.zeros(0, np.int64)
+    return (np.concatenate(hits_q) if hits_q else empty,
+            np.concatenate(hits_s) if hits_s else empty, uncertain)
+
+
+def exact_crossings(Q, segs) -> tuple[list[int], bool]:
+    """Exact: indices of segments (pairs of integer points) the rightward ray
+    from integer point Q crosses, and whether Q lies on one of them."""
+    out: list[int] = []
+    for s, (p1, p2) in enumerate(segs):
+        o = orient_int(p1, p2, Q)
+        if (o == 0 and min(p1[0], p2[0]) <= Q[0] <= max(p1[0], p2[0])
+                and min(p1[1], p2[1]) <= Q[1] <= max(p1[1], p2[1])):
+            return out, True
+        if (p1[1] > Q[1]) != (p2[1] > Q[1]) and (o > 0) == (p2[1] > p1[1]):
+            out.append(s)
+    return out, False
+
+
+class Boundary:
+    """Closed boundary loops over the nodes of an ExactPoints array.
+
+    ``segments`` (K, 2) index ``E``'s points.  ``holes`` (optional hole
+    points, as in a .poly file) are checked against the even-odd rule.
+    """
+
+    def __init__(self, E: ExactPoints, segments, holes=None, oriented=False):
+        self.E = E
+        self.segments = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
+        self.oriented = oriented
+        if len(self.segments) < 3:
+            raise GeometryError(f"a boundary needs at least 3 segments, got {len(self.segments)}")
+        self.loops = chain_loops(self.segments, oriented)
+        self.depth = self._depths()
+        self._check_holes(holes)
+
+    # -- location -------------------------------------------------------
+    def segment_points(self, scale: int = 1):
+        P = self.E.P
+        return [((scale * P[a][0], scale * P[a][1]), (scale * P[b][0], scale * P[b][1]))
+                for a, b in self.segments.tolist()]
+
+    def locate(self, q, exact_query, delta, exact=False) -> np.ndarray:
+        """Even-odd location of points: +1 in the domain, 0 on a segment, -1 out.
+
+        ``q`` (Q, 2) float positions within ``delta`` of the exact ones;
+        ``exact_query(k) -> (X, Y, scale)`` the exact point k as integers in
+        the integer scale of ``E`` times ``scale``."""
+        pts = self.E.points
+        p1, p2 = pts[self.segments[:, 0]], pts[self.segments[:, 1]]
+        hq, _, uncertain = float_crossings(q, p1, p2, delta)
+        odd = np.bincount(hq, minlength=len(q)) % 2 == 1
+        out = np.where(odd, 1, -1).astype(np.int64)
+        todo = range(len(q)) if exact else np.nonzero(uncertain)[0].tolist()
+        cache: dict[int, list] = {}
+        for k in todo:
+            X, Y, scale = exact_query(k)
+            segs = cache.setdefault(scale, self.segment_points(scale))
+            near = self._band(q[k, 1], delta, p1, p2)
+            hits, on = exact_crossings((X, Y), [segs[s] for s in near])
+            out[k] = 0 if on else (1 if len(hits) % 2 else -1)
+        return out
+
+    @staticmethod
+    def _band(y, delta, p1, p2):
+        lo = np.minimum(p1[:, 1], p2[:, 1]) - 4 * delta
+        hi = np.maximum(p1[:, 1], p2[:, 1]) + 4 * delta
+        return np.nonzero((lo <= y) & (y <= hi))[0].tolist()
+
+    def _depths(self) -> list[int]:
+        """Nesting depth of each loop: how many other loops enclose it (exact)."""
+        P = self.E.P
+        polys = [[P[i] for i in lp] for lp in self.loops]
+        depth = []
+        for i, lp in enumerate(self.loops):
+            d = 0
+            for j, poly in enumerate(polys):
+                if i == j:
+                    continue
+                w = point_in_polygon(P[lp[0]], poly)
+                if w == 0:
+                    raise GeometryError(f"boundary loops touch: node {lp[0]} of loop {i} "
+                                        f"lies on loop {j}")
+                d += w > 0
+            depth.append(d)
+        return depth
+
+    def _check_holes(self, holes):
+        if holes is None or len(holes) == 0:
+            return
+        holes = np.asarray(holes, dtype=np.float64).reshape(-1, 2)
+        nodes = np.concatenate([np.asarray(lp) for lp in self.loops])
+        H = ExactPoints(np.vstack([self.E.points[nodes], holes]))  # one scale for both
+        ends = np.cumsum([len(lp) for lp in self.loops])
+        polys = [H.P[e - len(lp):e] for e, lp in zip(ends.tolist(), self.loops)]
+        inside = [[point_in_polygon(H.P[len(nodes) + h], poly) for poly in polys]
+                  for h in range(len(holes))]
+        for h, where in enumerate(inside):
+            if 0 in where or sum(w > 0 for w in where) % 2 == 1:
+                raise GeometryError(f"hole point {h} at {tuple(holes[h].tolist())} lies in the "
+                                    "domain or on its boundary (by the even-odd rule)")
+        for i, d in enumerate(self.depth):
+            if d % 2 == 1 and not any(where[i] > 0 for where in inside):
+                raise GeometryError(
+                    f"loop {i} (node {self.loops[i][0]}) bounds a hole by the even-odd rule but "
+                    "contains no hole point: meshed-on-both-sides loops are not supported"
+                )
+
+    # -- global facts ---------------------------------------------------
+    def area_exact(self) -> Fraction:
+        """Domain area in the integer scale: outer loops minus holes (exact)."""
+        return sum(
+            (abs(signed_area_exact(self.E.P, lp)) * (1 if d % 2 == 0 else -1)
+             for lp, d in zip(self.loops, self.depth)),
+            Fraction(0),
+        )
+
+    def area(self) -> float:
+        return float(self.area_exact() / (1 << (2 * self.E.shift)))
+
+    def euler(self) -> int:
+        """Euler characteristic of the domain: components minus holes."""
+        return sum(1 if d % 2 == 0 else -1 for d in self.depth)

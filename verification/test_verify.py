@@ -1,0 +1,379 @@
+"""bubblemesh.verify, the checker for anyone's mesh: it must accept meshes of
+trusted peers (Triangle, Gmsh) and name what is wrong in broken ones.  The
+expected answers come from brute force in the tests (Fraction arithmetic,
+the peers' own input), never from the checker's output."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bubblemesh import verify
+from bubblemesh.verify.delaunay import circumcircles
+from bubblemesh.verify.exact import ExactPoints, incircle_signs, orient_signs
+
+SQUARE = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0.3, 0.3], [0.6, 0.3], [0.6, 0.6],
+                   [0.3, 0.6]], dtype=float)
+SEGMENTS = np.array([[0, 1], [1, 2], [2, 3], [3, 0], [4, 5], [5, 6], [6, 7], [7, 4]])
+HOLE = np.array([[0.45, 0.45]])
+
+
+def _triangle_mesh(opts="pYY", extra=200, seed=1):
+    """Triangle's CDT of the square with a hole and random interior points."""
+    triangle = pytest.importorskip("triangle")
+    rng = np.random.default_rng(seed)
+    inner = rng.random((extra, 2))
+    inner = inner[~((inner > 0.29) & (inner < 0.61)).all(axis=1)]  # none in or near the hole
+    verts = np.vstack([SQUARE, inner])
+    out = triangle.triangulate(dict(vertices=verts, segments=SEGMENTS, holes=HOLE), opts)
+    tri = out["triangles"].astype(np.int64)
+    return out["vertices"], tri
+
+
+def _F(p):
+    return Fraction(p[0]), Fraction(p[1])
+
+
+def _orient(a, b, c):
+    a, b, c = _F(a), _F(b), _F(c)
+    return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+
+
+def _incircle(a, b, c, d):
+    rows = []
+    for p in (a, b, c):
+        x, y = _F(p)[0] - _F(d)[0], _F(p)[1] - _F(d)[1]
+        rows.append((x, y, x * x + y * y))
+    (a1, a2, a3), (b1, b2, b3), (c1, c2, c3) = rows
+    return a1 * (b2 * c3 - b3 * c2) - a2 * (b1 * c3 - b3 * c1) + a3 * (b1 * c2 - b2 * c1)
+
+
+def _convex_flips(pts, tri, fixed):
+    """Interior non-segment edges whose quadrilateral is strictly convex and
+    not cocircular, with the flipped triangle array (brute force, Fractions)."""
+    opp = {}
+    for t, r in enumerate(tri.tolist()):
+        for i in range(3):
+            opp[(r[(i + 1) % 3], r[(i + 2) % 3])] = (t, r[i])
+    for (a, b), (t, x) in opp.items():
+        if a < b and (b, a) in opp and (a, b) not in fixed:
+            u, y = opp[(b, a)]
+            P = pts
+            if _orient(P[x], P[a], P[y]) > 0 and _orient(P[y], P[b], P[x]) > 0 \
+                    and _incircle(P[a], P[b], P[x], P[y]) != 0:
+                flipped = tri.copy()
+                flipped[t], flipped[u] = [x, a, y], [y, b, x]
+                yield (a, b), (x, y), (t, u), flipped
+
+
+# --------------------------------------------------------------------------- peers accepted
+
+
+@pytest.mark.peers
+def test_triangle_cdt_is_reported_valid_and_constrained_delaunay():
+    pts, tri = _triangle_mesh("pYY")
+    assert np.array_equal(pts[: len(SQUARE)], SQUARE)
+    report = verify.check(pts, tri, SEGMENTS, SQUARE, holes=HOLE)
+    assert report.ok, report.summary()
+    assert report.splits == {}  # Y forbids Steiner points on segments
+    assert report.facts["euler"] == 0  # a square with one hole: 1 - 1
+    assert "constrained" in report.checks["delaunay"]
+
+
+@pytest.mark.peers
+def test_triangle_quality_mesh_reports_its_segment_splits():
+    """With 'q' Triangle splits segments; each split node must lie exactly on
+    its segment (Fraction check here), and the checker lists exactly those."""
+    pts, tri = _triangle_mesh("pq30a0.005", extra=0)
+    report = verify.check(pts, tri, SEGMENTS, SQUARE, holes=HOLE, split_tol=0.0)
+    assert report.ok, report.summary()
+    expected = {}
+    for k, (a, b) in enumerate(SEGMENTS.tolist()):
+        on = [v for v in range(len(SQUARE), len(pts))
+              if _orient(SQUARE[a], SQUARE[b], pts[v]) == 0
+              and min(SQUARE[a][0], SQUARE[b][0]) <= pts[v][0] <= max(SQUARE[a][0], SQUARE[b][0])
+              and min(SQUARE[a][1], SQUARE[b][1]) <= pts[v][1] <= max(SQUARE[a][1], SQUARE[b][1])]
+        if on:
+            expected[k] = set(on)
+    assert {k: set(c[1:-1]) for k, c in report.splits.items()} == expected
+    strict = verify.check(pts, tri, SEGMENTS, SQUARE, holes=HOLE, allow_splits=False)
+    assert {v.segment for v in strict.of_kind("split_segment")} == set(expected)
+
+
+@pytest.mark.peers
+def test_gmsh_mesh_file_is_valid_and_conforming(tmp_path):
+    """Gmsh's default 2-D algorithm is not guaranteed Delaunay, so its
+    Delaunay verdict is compared with a brute-force local test (by the
+    constrained Delaunay lemma, global and local agree on a valid conforming
+    mesh) instead of being assumed."""
+    gmsh = pytest.importorskip("gmsh")
+    from bubblemesh.io import write_poly
+
+    gmsh.initialize(["-noenv"])
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("sq")
+        ids = [gmsh.model.geo.addPoint(x, y, 0, 0.08) for x, y in SQUARE.tolist()]
+        outer = [gmsh.model.geo.addLine(ids[i], ids[(i + 1) % 4]) for i in range(4)]
+        inner = [gmsh.model.geo.addLine(ids[4 + i], ids[4 + (i + 1) % 4]) for i in range(4)]
+        loops = [gmsh.model.geo.addCurveLoop(outer), gmsh.model.geo.addCurveLoop(inner)]
+        gmsh.model.geo.addPlaneSurface(loops)
+        gmsh.model.geo.synchronize()
+        gmsh.model.mesh.generate(2)
+        gmsh.write(str(tmp_path / "sq.msh"))
+    finally:
+        gmsh.finalize()
+    write_poly(tmp_path / "sq.poly", SQUARE, SEGMENTS, HOLE)
+    report = verify.check_file(tmp_path / "sq.msh", boundary=tmp_path / "sq.poly")
+    delaunay_kinds = {"not_delaunay"}
+    others = [v for v in report.violations if v.kind not in delaunay_kinds]
+    assert not others, report.summary()
+    assert len(report.splits) == len(SEGMENTS)  # Gmsh refines every boundary line
+    pts, tri = verify.read_mesh(tmp_path / "sq.msh")
+    bad_local = 0
+    opp = {}
+    for r in tri.tolist():
+        for i in range(3):
+            opp[(r[(i + 1) % 3], r[(i + 2) % 3])] = r[i]
+    on_boundary = {tuple(sorted(e)) for c in report.splits.values() for e in zip(c, c[1:])}
+    for r in tri.tolist():
+        for i in range(3):
+            a, b = r[(i + 1) % 3], r[(i + 2) % 3]
+            if (b, a) in opp and tuple(sorted((a, b))) not in on_boundary:
+                bad_local += _incircle(*(pts[j, :2] for j in r), pts[opp[(b, a)], :2]) > 0
+    assert (report.count("not_delaunay") > 0) == (bad_local > 0)
+
+
+# --------------------------------------------------------------------------- broken meshes
+
+
+@pytest.mark.peers
+def test_one_flipped_edge_is_named():
+    pts, tri = _triangle_mesh("pYY")
+    (a, b), (x, y), (t, u), flipped = next(_convex_flips(pts, tri, set()))
+    assert verify.check(pts, tri, SEGMENTS, SQUARE, holes=HOLE).ok
+    report = verify.check(pts, flipped, SEGMENTS, SQUARE, holes=HOLE)
+    assert {v.kind for v in report.violations} == {"not_delaunay"}, report.summary()
+    named = {tuple(sorted(v.edge)) for v in report.violations if v.edge is not None}
+    assert named == {tuple(sorted((x, y)))}
+    assert {v.triangle for v in report.violations} <= {t, u}
+    assert {v.node for v in report.violations} >= {a, b}  # each inside the other's new circle
+
+
+@pytest.mark.peers
+def test_removed_triangle_names_the_hole_edges():
+    pts, tri = _triangle_mesh("pYY")
+    nb = len(SQUARE)
+    interior = [t for t, r in enumerate(tri.tolist()) if min(r) >= nb]
+    k = interior[len(interior) // 2]
+    report = verify.check(pts, np.delete(tri, k, axis=0), SEGMENTS, SQUARE, holes=HOLE)
+    assert not report.ok
+    r = tri[k].tolist()
+    hole_edges = {tuple(sorted((r[i], r[(i + 1) % 3]))) for i in range(3)}
+    assert {tuple(sorted(v.edge)) for v in report.of_kind("extra_boundary_edge")} == hole_edges
+    assert report.count("area") == 1 and report.count("euler") == 1
+
+
+@pytest.mark.peers
+def test_removed_boundary_triangle_loses_its_segment():
+    pts, tri = _triangle_mesh("pYY")
+    seg_edges = {tuple(sorted(s)) for s in SEGMENTS.tolist()}
+    def on_segments(r):
+        return {tuple(sorted((r[i], r[(i + 1) % 3]))) for i in range(3)} & seg_edges
+
+    k = next(t for t, r in enumerate(tri.tolist()) if on_segments(r))
+    mine = on_segments(tri[k].tolist())
+    report = verify.check(pts, np.delete(tri, k, axis=0), SEGMENTS, SQUARE, holes=HOLE)
+    lost = {v.segment for v in report.of_kind("missing_segment")}
+    want = {i for i, s in enumerate(SEGMENTS.tolist()) if tuple(sorted(s)) in mine}
+    assert lost == want
+
+
+@pytest.mark.peers
+def test_clockwise_triangle_is_reported_by_id():
+    pts, tri = _triangle_mesh("pYY")
+    bad = tri.copy()
+    bad[17] = bad[17][::-1]
+    report = verify.check(pts, bad, SEGMENTS, SQUARE, holes=HOLE)
+    assert [v.triangle for v in report.of_kind("orientation")] == [17]
+
+
+@pytest.mark.peers
+@pytest.mark.parametrize("node", [0, 5])
+def test_moved_boundary_node_is_reported(node):
+    pts, tri = _triangle_mesh("pYY")
+    moved = pts.copy()
+    moved[node, 1] = np.nextafter(moved[node, 1], 2.0)  # one ulp: still a fine mesh
+    report = verify.check(moved, tri, SEGMENTS, SQUARE, holes=HOLE)
+    assert [v.node for v in report.of_kind("boundary_moved")] == [node]
+
+
+def test_outside_triangle_and_frame():
+    """A square of two triangles checked against a smaller domain (the lower
+    half): the upper triangle's centroid is outside."""
+    pts = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0, 0.5], [1, 0.5]], float)
+    tri = np.array([[0, 1, 5], [0, 5, 4], [4, 5, 2], [4, 2, 3]])
+    lower = [(0, 1), (1, 5), (5, 4), (4, 0)]
+    report = verify.check(pts, tri, lower)
+    assert sorted({v.triangle for v in report.of_kind("outside_domain")}) == [2, 3]
+    frame = report.to_frame()
+    assert list(frame.columns[:2]) == ["kind", "triangle"]
+    assert len(frame) == len(report.violations) and set(frame["kind"]) >= {"outside_domain"}
+    assert "outside_domain" in report.summary()
+
+
+def test_population_criterion_eq6():
+    """Equal radii r: every element bubble has radius r (eq. 3), so sum A_e =
+    M pi r^2; the criterion holds iff that reaches the domain area 1."""
+    pts = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)
+    tri = np.array([[0, 1, 2], [0, 2, 3]])
+    r_ok = np.sqrt(1 / (2 * np.pi)) * 1.001
+    assert verify.check(pts, tri, radii=np.full(4, r_ok)).ok
+    low = verify.check(pts, tri, radii=np.full(4, r_ok * 0.99))
+    assert [v.kind for v in low.violations] == ["population"]
+
+
+# --------------------------------------------------------------------------- exactness
+
+
+def _near_degenerate(rng, n):
+    """Points on a line / circle perturbed by a few ulps, where floats lie."""
+    t = rng.random(n)
+    line = np.column_stack([0.1 + 3 * t, 0.7 + 3 * t])
+    ang = rng.random(n) * 2 * np.pi
+    circle = np.column_stack([0.3 + np.cos(ang), 0.2 + np.sin(ang)])
+    pts = np.vstack([line, circle, [[0.1, 0.7], [3.1, 3.7]]])
+    steps = rng.integers(-3, 4, pts.shape)
+    for _ in range(3):
+        pts = np.where(steps > 0, np.nextafter(pts, np.inf), pts)
+        pts = np.where(steps < 0, np.nextafter(pts, -np.inf), pts)
+        steps = steps - np.sign(steps)
+    return pts
+
+
+def test_filtered_predicates_equal_fraction_arithmetic():
+    rng = np.random.default_rng(7)
+    pts = _near_degenerate(rng, 60)
+    E = ExactPoints(pts)
+    idx = rng.integers(0, len(pts), (3000, 4))
+    a, b, c, d = idx.T
+    o = orient_signs(E, a, b, c)
+    ic = incircle_signs(E, a, b, c, d)
+    for k in range(len(idx)):
+        P = [pts[i] for i in idx[k]]
+        assert o[k] == np.sign(_orient(P[0], P[1], P[2]))
+        assert ic[k] == np.sign(_incircle(*P))
+    assert (o == 0).any() and (ic == 0).any()  # the degenerate cases were hit
+
+
+def test_circumcircle_query_disk_contains_every_inside_point():
+    rng = np.random.default_rng(3)
+    pts = _near_degenerate(rng, 40)
+    E = ExactPoints(pts)
+    idx = rng.integers(0, len(pts), (400, 3))
+    s = orient_signs(E, *idx.T)
+    tri = np.where((s < 0)[:, None], idx[:, [0, 2, 1]], idx)[s != 0]
+    centers, radii = circumcircles(E, tri)
+    inside = incircle_signs(E, np.repeat(tri[:, 0], len(pts)), np.repeat(tri[:, 1], len(pts)),
+                            np.repeat(tri[:, 2], len(pts)), np.tile(np.arange(len(pts)), len(tri)))
+    dist = np.hypot(*(np.repeat(centers, len(pts), axis=0) - np.tile(E.scaled, (len(tri), 1))).T)
+    assert np.all(dist[inside > 0] <= np.repeat(radii, len(pts))[inside > 0])
+    assert (inside > 0).sum() > 100
+
+
+# --------------------------------------------------------------------------- CLI and isolation
+
+
+@pytest.mark.peers
+def test_main_check_exit_status(tmp_path, capsys):
+    from bubblemesh.io import write_mesh, write_poly
+
+    pts, tri = _triangle_mesh("pYY")
+    write_poly(tmp_path / "b.poly", SQUARE, SEGMENTS, HOLE)
+    write_mesh(tmp_path / "good.vtu", pts, tri)
+    _, _, _, flipped = next(_convex_flips(pts, tri, set()))
+    write_mesh(tmp_path / "bad.vtu", pts, flipped)
+    assert verify.main_check([str(tmp_path / "good.vtu"), "--boundary",
+                              str(tmp_path / "b.poly")]) == 0
+    assert "mesh check: OK" in capsys.readouterr().out
+    csv = tmp_path / "v.csv"
+    assert verify.main_check([str(tmp_path / "bad.vtu"), "--boundary", str(tmp_path / "b.poly"),
+                              "--csv", str(csv)]) == 1
+    assert "not_delaunay" in capsys.readouterr().out and "not_delaunay" in csv.read_text()
+    (tmp_path / "junk.vtu").write_text("not a mesh")
+    assert verify.main_check([str(tmp_path / "junk.vtu")]) == 2
+    assert verify.main_check([str(tmp_path / "absent.msh")]) == 2
+    (tmp_path / "open.poly").write_text("3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n2 0\n1 1 2\n2 2 3\n")
+    assert verify.main_check([str(tmp_path / "good.vtu"), "--boundary",
+                              str(tmp_path / "open.poly")]) == 2
+
+
+MESHER = ["generation", "optimization", "triangulation", "_cavity", "_cdt", "_delaunay",
+          "_forces", "_insertion", "_inside", "_mesh", "_ordering", "_queue", "_renumber",
+          "_rings", "_status", "_verlet", "_workspace", "bubbles", "domain", "memory",
+          "predicates", "quality", "simd", "threads", "topology", "cli"]
+
+
+def test_verify_imports_nothing_of_the_mesher():
+    """Statically: every import in bubblemesh/verify is numpy/scipy/pandas/
+    meshio/stdlib, bubblemesh.errors, bubblemesh.io or verify itself.  Then
+    for real: a child process with the mesher modules and numba blocked
+    imports verify and checks a mesh."""
+    root = Path(verify.__file__).parent
+    allowed_top = {"numpy", "scipy", "pandas", "meshio", "__future__", "argparse", "dataclasses",
+                   "fractions", "functools", "itertools", "math", "pathlib", "sys", "time",
+                   "typing"}
+    for path in root.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                names = [("." * node.level) + (node.module or "")]
+            else:
+                continue
+            for name in names:
+                ok = (name.startswith(".") and not name.startswith("..")) or \
+                    name.split(".")[0] in allowed_top or name in ("bubblemesh.errors",
+                                                                  "bubblemesh.io")
+                assert ok, f"{path.name} imports {name}"
+    package = Path(verify.__file__).parents[1]
+    code = f"""
+import sys, types
+pkg = types.ModuleType("bubblemesh"); pkg.__path__ = [{str(package)!r}]
+sys.modules["bubblemesh"] = pkg
+for name in {MESHER!r}:
+    sys.modules["bubblemesh." + name] = None
+sys.modules["numba"] = None
+from bubblemesh import verify
+r = verify.check([[0, 0], [1, 0], [0, 1]], [[0, 1, 2]], [[0, 1], [1, 2], [2, 0]])
+assert r.ok, r.summary()
+print("isolated ok")
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0 and "isolated ok" in out.stdout, out.stderr
+
+
+@pytest.mark.peers
+def test_centroid_location_in_small_batches_equals_exact(monkeypatch):
+    """The banded float crossing test, forced into many tiny batches, agrees
+    with the all-exact location on Triangle's mesh of the convex hull (holes
+    filled, so centroids fall inside, in the hole and outside)."""
+    from bubblemesh.verify import conform, domain
+
+    triangle = pytest.importorskip("triangle")
+    out = triangle.triangulate(dict(vertices=SQUARE, segments=SEGMENTS), "pcq30a0.01")
+    pts, tri = out["vertices"], out["triangles"].astype(np.int64)
+    E = ExactPoints(pts)
+    B = domain.Boundary(E, SEGMENTS)
+    monkeypatch.setattr(domain, "_MAX_PAIRS", 7)
+    fast = conform.locate_centroids(E, tri, B)
+    exact = conform.locate_centroids(E, tri, B, exact=True)
+    assert np.array_equal(fast, exact)
+    assert set(fast.tolist()) == {1, -1}  # the hole's triangles are outside
