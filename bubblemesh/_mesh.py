@@ -232,10 +232,6 @@ def read(path: str | Path, file_format: str | None = None) -> Mesh:
     """Read any meshio-readable triangle mesh file as a :class:`Mesh`
     (``Mesh.from_meshio``); a file bubblemesh wrote comes back with the same
     points, triangles and radii."""
-    import meshio
+    from .io import read_meshio
 
-    try:
-        mesh = meshio.read(path, file_format=file_format)
-    except (OSError, meshio.ReadError, ValueError, KeyError) as error:
-        raise GeometryError(f"{path}: cannot read a mesh: {error}") from error
-    return Mesh.from_meshio(mesh)
+    return Mesh.from_meshio(read_meshio(path, file_format))

@@ -184,6 +184,12 @@ def _parser() -> argparse.ArgumentParser:
     bench.add_argument("--quick", action="store_true", help="a short run (smoke test)")
     bench.add_argument("--out", type=Path, default=Path("reports"), help="report folder")
     bench.set_defaults(run=_run_bench)
+    from bubblemesh.verify.check import CHECK_DESCRIPTION, add_check_arguments
+
+    check = command("check", "check any mesh file exactly (exit 1 when something is wrong)")
+    check.description = CHECK_DESCRIPTION
+    add_check_arguments(check)
+    check.set_defaults(run=_run_check)
     parser.set_defaults(debug=False)
     return parser
 
@@ -323,6 +329,15 @@ def _check_case_names(names: list[str]) -> None:
 
 def _exit_status(result) -> int:
     return result if isinstance(result, int) else 0
+
+
+def _run_check(args: argparse.Namespace) -> int:
+    from bubblemesh.verify.check import run_check
+
+    try:
+        return run_check(args)
+    except (OSError, ValueError, TypeError) as error:
+        raise UsageError(f"cannot read the input: {error}") from None
 
 
 def _run_reproduce(args: argparse.Namespace) -> int:

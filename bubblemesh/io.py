@@ -43,7 +43,8 @@ class PolyFormatError(GeometryError):
 
 
 class MeshFileError(ValueError):
-    """A mesh file that cannot be written: unknown format, missing folder, meshio failure."""
+    """A mesh file that cannot be read or written: unknown format, missing folder or
+    file, meshio failure."""
 
 
 class PolyFile(NamedTuple):
@@ -292,6 +293,25 @@ def _meshio():
     except ImportError as error:
         raise ImportError("writing meshes needs meshio: pip install meshio") from error
     return meshio
+
+
+def read_meshio(path: str | Path, file_format: str | None = None) -> Any:
+    """``meshio.read`` without its side effects: a file no reader accepts (meshio
+    prints and exits) or a reader's own error is a :class:`MeshFileError`."""
+    import contextlib
+    import io as _io
+
+    meshio = _meshio()
+    if not Path(path).is_file():
+        raise MeshFileError(f"{path}: no such file")
+    quiet = _io.StringIO()
+    try:
+        with contextlib.redirect_stdout(quiet), contextlib.redirect_stderr(quiet):
+            return meshio.read(path, file_format=file_format)
+    except SystemExit:
+        raise MeshFileError(f"{path}: meshio cannot read this file") from None
+    except Exception as error:  # noqa: BLE001 - every reader raises its own kinds
+        raise MeshFileError(f"{path}: meshio cannot read it: {error}") from error
 
 
 def _mesh_format(path: Path, file_format: str | None) -> str:

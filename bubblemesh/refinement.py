@@ -74,6 +74,15 @@ class RefinedBoundary:
         """Validate the refined loops as a Domain (GeometryError if they conflict)."""
         return Domain.from_loops(self.loops)
 
+    def exact_only(self) -> RefinedBoundary:
+        """The same refinement without the nodes that are not exactly on their
+        input segment: its segments lie on the input's, so it is as valid as
+        the input."""
+        keep = self.on_segment
+        index = tuple(np.cumsum(k)[i] - 1 for k, i in zip(keep, self.input_index))
+        return RefinedBoundary(tuple(loop[k] for loop, k in zip(self.loops, keep)), index,
+                               tuple(k[k] for k in keep), 0.0)
+
 
 def refine_boundary(
     domain_or_loops, h, *, resolution: float = 0.25, max_nodes: int = MAX_SOURCES

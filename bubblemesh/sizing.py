@@ -45,6 +45,9 @@ __all__ = ["SizeField", "as_size_function", "cone_at", "STACK_SIZE"]
 
 SAMPLING = 0.5  # boundary samples are spaced <= SAMPLING * h
 FEATURE_SLACK = 1.25  # on the boundary h <= FEATURE_SLACK * feature size
+# gaps thinner than this fraction of the shortest input segment are not resolved
+# (two segments a few ulps apart would otherwise ask for sizes of 0)
+FEATURE_FLOOR = 1e-3
 QUADTREE_SAMPLING = 1.0  # quadtree cells have sides <= QUADTREE_SAMPLING * user size
 MAX_SOURCES = 2**24  # beyond this the requested sizes are unreasonably small
 _LEAF = 8  # items per tree leaf
@@ -225,6 +228,7 @@ class _Boundary:
         self.a = np.ascontiguousarray(domain.points[domain.segments[:, 0]])
         self.b = np.ascontiguousarray(domain.points[domain.segments[:, 1]])
         self.length = np.hypot(*(self.b - self.a).T)
+        self.floor = FEATURE_FLOOR * float(self.length.min())
         ids = np.arange(len(self.a), dtype=np.int64)
         self.prev, self.next = ids.copy(), ids.copy()
         first = 0
@@ -241,9 +245,10 @@ class _Boundary:
     def feature_size(self, xy: np.ndarray, excluded: np.ndarray) -> np.ndarray:
         """(b): distance from each point to the segments not in its row of ``excluded``."""
         t = self.tree
-        return _feature_distance(
+        distance = _feature_distance(
             xy, excluded, self.ids, self.a_sorted, self.b_sorted, t.start, t.end, t.left, t.box
         )
+        return np.maximum(distance, self.floor)
 
     def along(self, segment: np.ndarray) -> np.ndarray:
         """Exclusion rows for points inside segments: the segment and its two neighbours."""

@@ -29,23 +29,29 @@ def poly(tmp_path) -> Path:
     return path
 
 
-@pytest.mark.parametrize("optimize", [True, False])
-def test_mesh_writes_the_mesh_and_reports_it(poly, tmp_path, capsys, optimize):
+@pytest.mark.parametrize("options", [[], ["--paper"], ["--no-optimize"]])
+def test_mesh_writes_the_mesh_and_reports_it(poly, tmp_path, capsys, options):
     meshio = pytest.importorskip("meshio")
     out = tmp_path / "square.vtu"
-    argv = ["mesh", str(poly), "-o", str(out)] + ([] if optimize else ["--no-optimize"])
-    assert main(argv) == 0
+    assert main(["mesh", str(poly), "-o", str(out), *options]) == 0
     printed = capsys.readouterr().out
     mesh = meshio.read(out)
     triangles = mesh.cells_dict["triangle"]
-    assert f"nodes: {len(mesh.points)} (14 on the boundary)" in printed
+    n_b = int(re.search(r"nodes: \d+ \((\d+) on the boundary\)", printed).group(1))
+    assert f"nodes: {len(mesh.points)} ({n_b} on the boundary)" in printed
     assert f"elements: {len(triangles)}" in printed
     line = re.search(r"radius ratio: min (\S+), mean (\S+), median (\S+);", printed)
     assert line, printed
     low, mean, median = (float(v) for v in line.groups())
     assert 0 < low <= mean <= 1 and 0 < median <= 1
-    # the boundary nodes come first and unmoved
-    np.testing.assert_array_equal(mesh.points[:14, :2], np.vstack(SQUARE_WITH_HOLE))
+    inputs = np.vstack(SQUARE_WITH_HOLE)
+    if options:  # paper mode: the input nodes are the boundary, first and unmoved
+        assert n_b == 14
+        np.testing.assert_array_equal(mesh.points[:14, :2], inputs)
+    else:  # the default refines the boundary: every input node is still a boundary node
+        boundary = {tuple(p) for p in mesh.points[:n_b, :2].tolist()}
+        assert n_b >= 14 and {tuple(p) for p in inputs.tolist()} <= boundary
+        assert low > 0.5, "the default mesher left an element below 0.5"
     # the mesh covers the domain: triangle areas add up to A_geo = 1 - 0.04
     p = mesh.points[:, :2]
     a, b, c = p[triangles[:, 0]], p[triangles[:, 1]], p[triangles[:, 2]]
@@ -80,7 +86,8 @@ def meshing(monkeypatch) -> list:
     import bubblemesh
 
     calls: list = []
-    monkeypatch.setattr(bubblemesh, "generate", lambda *a, **k: calls.append(a) or 1 / 0)
+    for name in ("generate", "mesh"):  # the --paper stages and the default mesher
+        monkeypatch.setattr(bubblemesh, name, lambda *a, **k: calls.append(a) or 1 / 0)
     return calls
 
 
@@ -171,7 +178,8 @@ def failing_generate(monkeypatch, error: BaseException) -> None:
     def generate(*args, **kwargs):
         raise error
 
-    monkeypatch.setattr(bubblemesh, "generate", generate)
+    monkeypatch.setattr(bubblemesh, "generate", generate)  # --paper
+    monkeypatch.setattr(bubblemesh, "mesh", generate)  # the default mesher
 
 
 @pytest.mark.parametrize(
@@ -217,7 +225,7 @@ def test_warnings_are_one_line_each(poly, tmp_path, capsys, monkeypatch):
         warnings.warn("first\nsecond", RuntimeWarning, stacklevel=1)
         raise MeshingError("stopped")
 
-    monkeypatch.setattr(bubblemesh, "generate", generate)
+    monkeypatch.setattr(bubblemesh, "mesh", generate)
     assert main(["mesh", str(poly), "-o", str(tmp_path / "x.vtu")]) == 1
     lines = capsys.readouterr().err.splitlines()
     assert len(lines) == 2, lines
@@ -322,3 +330,25 @@ def test_module_runs_as_a_program():
     )
     for option in ("-o OUT", "--no-optimize", "--plot PNG", "--max-insertions K"):
         assert option in result.stdout
+
+
+def test_check_judges_a_mesh_file_and_its_boundary(poly, tmp_path, capsys):
+    """``bubblemesh check``: a paper mesh of the .poly is clean (0); with one
+    triangle removed it is not (1) and the summary names what is wrong; a file
+    that is no mesh is a usage error (2)."""
+    pytest.importorskip("meshio")
+    import bubblemesh as bm
+
+    mesh = bm.optimize(bm.generate(Domain.from_poly(poly)))
+    mesh.write(tmp_path / "good.vtu")
+    assert main(["check", str(tmp_path / "good.vtu"), "--boundary", str(poly)]) == 0
+    assert "ok" in capsys.readouterr().out.lower()
+    from bubblemesh.io import write_mesh
+
+    write_mesh(tmp_path / "holed.vtu", mesh.points, mesh.triangles[1:])
+    assert main(["check", str(tmp_path / "holed.vtu"), "--boundary", str(poly)]) == 1
+    out = capsys.readouterr().out
+    assert "area" in out and ("boundary" in out or "segment" in out), out
+    (tmp_path / "junk.vtu").write_text("not a mesh")
+    assert main(["check", str(tmp_path / "junk.vtu")]) == 2
+    assert "cannot read the input" in error_line(capsys, "check")

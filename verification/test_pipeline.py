@@ -226,3 +226,15 @@ def test_guarded_smoothing_never_lowers_the_minimum_nor_inverts(loops, seed):
     assert O.radius_ratio_reference(X, tri).min() >= before * (1 - 1e-12)
     np.testing.assert_array_equal(X[~movable], np.asarray(m.points)[~movable])
     np.testing.assert_array_equal(X[: m.n_boundary], np.asarray(m.points)[: m.n_boundary])
+
+
+def test_segments_ulps_apart_do_not_ask_for_a_zero_size():
+    """A fuzz case (seed 236, ulp-jittered): a hole node a few ulps from the
+    outer loop made the feature size 0 and the size field refuse its own
+    sources; gaps below a thousandth of the shortest segment are not resolved."""
+    import fuzz
+
+    case = fuzz.make_case(236)
+    domain = bm.Domain.from_loops([np.array(loop) for loop in case["loops"]])
+    mesh = bm.mesh(domain)
+    assert fuzz.check_against_input(mesh, domain) == ""

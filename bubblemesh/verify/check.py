@@ -141,19 +141,10 @@ def _population(pts, tri, radii, domain, report):
 def read_mesh(path):
     """(points, triangles) of every 'triangle' block of a meshio-readable file.
 
-    A missing file is FileNotFoundError, an unreadable one ValueError."""
-    try:
-        import meshio
-    except ImportError as error:  # pragma: no cover - meshio is a dependency
-        raise ImportError("check_file needs meshio: pip install meshio") from error
-    if not Path(path).is_file():
-        raise FileNotFoundError(f"no mesh file {path}")
-    try:
-        mesh = meshio.read(str(path))
-    except SystemExit:  # meshio exits when no reader accepts the file
-        raise ValueError(f"meshio cannot read {path}") from None
-    except Exception as error:
-        raise ValueError(f"meshio cannot read {path}: {error}") from error
+    A missing or unreadable file is a ValueError (``io.MeshFileError``)."""
+    from bubblemesh.io import read_meshio
+
+    mesh = read_meshio(path)
     blocks = [c.data for c in mesh.cells if c.type == "triangle"]
     tri = np.concatenate(blocks) if blocks else np.zeros((0, 3), np.int64)
     return np.asarray(mesh.points, dtype=np.float64), tri.astype(np.int64)
@@ -178,13 +169,12 @@ def check_file(mesh_path, boundary=None, **options) -> Report:
     return check(points, triangles, seg, bpts, holes=rest[0] if rest else None, **options)
 
 
-def main_check(argv=None) -> int:
-    """``bubblemesh check MESHFILE [--boundary B.poly] [--limit N] [--split-tol T]
-    [--no-delaunay] [--csv OUT]``: print the summary; exit status 0 when
-    clean, 1 when anything is violated, 2 when the input cannot be read."""
-    parser = argparse.ArgumentParser(prog="bubblemesh check", description=(
-        "Check a triangle mesh exactly: validity, conformity to a boundary, constrained "
-        "Delaunay, boundary nodes unmoved, quality."))
+CHECK_DESCRIPTION = ("Check a triangle mesh exactly: validity, conformity to a boundary, "
+                     "constrained Delaunay, boundary nodes unmoved, quality.")
+
+
+def add_check_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of ``bubblemesh check``."""
     parser.add_argument("mesh", help="mesh file readable by meshio (.msh, .vtu, .xdmf, ...)")
     parser.add_argument("--boundary", help="Triangle .poly file with the input boundary")
     parser.add_argument("--limit", type=int, default=1000, help="violations kept per kind")
@@ -192,14 +182,28 @@ def main_check(argv=None) -> int:
                         help="relative distance for a node to split a segment (0: exact)")
     parser.add_argument("--no-delaunay", action="store_true", help="skip the Delaunay test")
     parser.add_argument("--csv", help="write one row per violation to this CSV file")
-    args = parser.parse_args(argv)
-    try:
-        report = check_file(args.mesh, args.boundary, limit=args.limit,
-                            split_tol=args.split_tol, delaunay=not args.no_delaunay)
-    except (OSError, ValueError, TypeError, ImportError) as error:
-        print(f"bubblemesh check: cannot read the input: {error}", file=sys.stderr)
-        return 2
+
+
+def run_check(args: argparse.Namespace) -> int:
+    """Check, print the summary (and the CSV); 0 when clean, 1 when anything is
+    violated.  An unreadable input raises (OSError, ValueError, TypeError)."""
+    report = check_file(args.mesh, args.boundary, limit=args.limit,
+                        split_tol=args.split_tol, delaunay=not args.no_delaunay)
     print(report.summary())
     if args.csv:
         report.to_frame().to_csv(args.csv, index=False)
     return 0 if report.ok else 1
+
+
+def main_check(argv=None) -> int:
+    """``bubblemesh check MESHFILE [--boundary B.poly] [--limit N] [--split-tol T]
+    [--no-delaunay] [--csv OUT]``: print the summary; exit status 0 when
+    clean, 1 when anything is violated, 2 when the input cannot be read."""
+    parser = argparse.ArgumentParser(prog="bubblemesh check", description=CHECK_DESCRIPTION)
+    add_check_arguments(parser)
+    args = parser.parse_args(argv)
+    try:
+        return run_check(args)
+    except (OSError, ValueError, TypeError, ImportError) as error:
+        print(f"bubblemesh check: cannot read the input: {error}", file=sys.stderr)
+        return 2
