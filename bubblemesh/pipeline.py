@@ -230,6 +230,19 @@ def _forces(mesh, R, max_iterations, tol, alpha, rings):
     return X, iterations, float(largest), int(blocked), lists.builds
 
 
+def _separate(X, P0):
+    """Nodes that the forces moved onto another node's coordinates (far from
+    the origin, where floats are coarse) go back to their distinct §2
+    positions; each round reverts at least one node, so it ends."""
+    for _ in range(len(X)):
+        _, inverse, counts = np.unique(X, axis=0, return_inverse=True, return_counts=True)
+        shared = counts[inverse.reshape(-1)] > 1
+        back = shared & np.any(X != P0, axis=1)
+        if not back.any():
+            return
+        X[back] = P0[back]
+
+
 def _triangulate(X, segments):
     try:
         return constrained_delaunay(X, segments)
@@ -266,6 +279,7 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
     q0 = float(triangle_quality(P0, np.asarray(mesh.triangles)).min(initial=1.0))
     R = np.asarray(mesh.radii, dtype=np.float64) * amplification
     X, iterations, largest, blocked, builds = _forces(mesh, R, max_iterations, tol, alpha, rings)
+    _separate(X, P0)
     clock.lap("forces")
     triangles, neighbors = _triangulate(X, segments)
     movable = np.ones(n, dtype=np.bool_)

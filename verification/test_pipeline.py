@@ -238,3 +238,18 @@ def test_segments_ulps_apart_do_not_ask_for_a_zero_size():
     domain = bm.Domain.from_loops([np.array(loop) for loop in case["loops"]])
     mesh = bm.mesh(domain)
     assert fuzz.check_against_input(mesh, domain) == ""
+
+
+@pytest.mark.parametrize("seed", [1697, 2022, 2232])
+def test_far_from_the_origin_no_two_nodes_meet(seed):
+    """Fuzz cases offset by 1e6 ... 1e15: the forces moved two nodes onto one
+    float position and the re-triangulation failed; now a valid mesh."""
+    import fuzz
+
+    case = fuzz.make_case(seed)
+    domain = bm.Domain.from_loops([np.array(loop) for loop in case["loops"]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", bm.QualityWarning)
+        mesh = bm.mesh(domain)
+    assert fuzz.check_against_input(mesh, domain) == ""
+    assert len(np.unique(mesh.points, axis=0)) == len(mesh.points)
