@@ -466,8 +466,8 @@ def _laplacian_uniform(base, n_boundary, steps):
         bt.copy(),
         sec,
         {
-            "options": f"bubblemesh.studies.peers.laplacian_smooth(steps={steps}): x <- mean of neighbours, "
-            "boundary fixed",
+            "options": f"bubblemesh.studies.peers.laplacian_smooth(steps={steps}): "
+            "x <- mean of neighbours, boundary fixed",
         },
     )
 

@@ -124,7 +124,7 @@ class Study:
     def cells(self, version: str | None = None) -> list[Cell]:
         """Every cell, case-major (case, then method, then grid point)."""
         version = version or bubblemesh_version()
-        cells = []
+        cells: list[Cell] = []
         for case in self.cases:
             for method in self.methods:
                 for params in method.points():
