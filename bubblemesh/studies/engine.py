@@ -220,6 +220,8 @@ def _client(address, workers, timeout, say):
 
     cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                            resources={TIMING: 1}, host="127.0.0.1", dashboard_address=None,
+                           # no dashboard; its health endpoints on a free loopback port
+                           scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
                            silence_logs=logging.ERROR)
     return Client(cluster), cluster, "a local dask cluster on this machine"
 

@@ -170,7 +170,6 @@ def run_cell(cell: Cell, verify: Verify | None = basic_check, keep_mesh: bool = 
     """Mesh one cell: ``{"row": {...}, "mesh": (points, triangles, radii) or None}``.
 
     Timed cells hold a per-process lock, so two never run at once in one worker."""
-    started = time.time()
     row: dict[str, Any] = dict(
         study=cell.study, key=cell.key, case=cell.case.name, method=cell.method.name,
         adapter=cell.method.reference(), params=json.dumps(dict(cell.params), sort_keys=True,
@@ -178,11 +177,12 @@ def run_cell(cell: Cell, verify: Verify | None = basic_check, keep_mesh: bool = 
         **{f"param_{k}": v for k, v in cell.params.items()},
         bubblemesh_version=bubblemesh_version(), case_digest=cell.case.digest,
         status="ok", reason="", timed=cell.method.timed, worker=_worker_name(),
-        started=started, versions=json.dumps(versions(), sort_keys=True),
+        started=None, versions=json.dumps(versions(), sort_keys=True),
     )
     mesh = None
     lock = _TIMING_LOCK if cell.method.timed else threading.Lock()
     with lock:
+        row["started"] = time.time()
         t0 = time.perf_counter()
         try:
             out = cell.method.run(cell.case, cell.params)
