@@ -339,11 +339,13 @@ def _run_reproduce(args: argparse.Namespace) -> int:
 
 
 def _needs(module: str, command: str) -> None:
-    import importlib.util
+    import importlib
 
-    if importlib.util.find_spec(module) is None:
+    try:
+        importlib.import_module(module)
+    except ImportError:
         raise CommandError(f"'bubblemesh {command}' needs {module}: "
-                           "pip install 'bubblemesh[studies]'")
+                           "pip install 'bubblemesh[studies]'") from None
 
 
 def _run_study(args: argparse.Namespace) -> int:

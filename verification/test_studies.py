@@ -357,6 +357,20 @@ def test_a_toml_definition_through_the_command_line(cases_dir, tmp_path, capsys)
     assert "unknown setting 'who'" in capsys.readouterr().err
 
 
+def test_reproduce_checks_its_arguments_before_meshing(monkeypatch, capsys, tmp_path):
+    from bubblemesh.cli import main
+
+    assert main(["reproduce", "--case", "fig3_circle", "--case", "nope", "--out",
+                 str(tmp_path)]) == 2
+    assert "unknown case 'nope'; known: fig3_circle, fig4_square_hole" in capsys.readouterr().err
+    assert main(["reproduce", "--scheduler", "localhost:1", "--out", str(tmp_path)]) == 2
+    assert "expected tcp://HOST:PORT" in capsys.readouterr().err
+    monkeypatch.setitem(sys.modules, "distributed", None)  # as if not installed
+    assert main(["reproduce", "--out", str(tmp_path)]) == 1
+    assert "pip install 'bubblemesh[studies]'" in capsys.readouterr().err
+    assert not (tmp_path / "results.csv").exists()
+
+
 def test_shipped_definitions_load():
     paper = load_study("paper")
     assert [c.name for c in paper.cases][0] == "fig3_circle" and len(paper.methods) == 9

@@ -764,10 +764,12 @@ def render(study, df, out, run=None, command: str | None = None, meta: dict | No
     import json
 
     out = Path(out)
+    record = out / f"{study.name}.run.json"
+    if meta is None and run is not None and run.computed == 0 and record.exists():
+        meta = json.loads(record.read_text())  # nothing new: the run that made the rows
     if meta is None:
         meta = run_meta(study, run, command or f"bubblemesh study {study.name} --out {out}")
-        (out / f"{study.name}.run.json").write_text(json.dumps(meta, indent=2, default=str)
-                                                     + "\n")
+        record.write_text(json.dumps(meta, indent=2, default=str) + "\n")
     if study.report == "paper":
         return render_paper(study, df, out, meta)
     return render_study(study, df, out, meta)
