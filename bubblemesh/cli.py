@@ -8,8 +8,9 @@ physically-based optimisation (§3); ``--no-optimize`` and ``--max-insertions``
 are paper-stage options and imply ``--paper``.  It reports the radius ratio
 of eq. 10.
 ``bubblemesh reproduce`` rebuilds the paper's Figs. 3-6 and the comparison
-with other meshers, ``bubblemesh bench`` times them; both live in the
-repository's ``cases`` package, imported only when asked for.
+with other meshers, ``bubblemesh study`` runs any study definition (both on
+dask), ``bubblemesh bench`` times them; they live in ``bubblemesh.studies``,
+imported only when asked for.
 
 Every error is reported as one line on stderr, ``bubblemesh COMMAND: error:
 ...``, and the exit status says which kind it was (``EXIT_STATUS`` below, also
@@ -175,8 +176,25 @@ def _parser() -> argparse.ArgumentParser:
         "--case", action="append", dest="cases", metavar="NAME",
         help="only this case (repeatable); default all",
     )  # fmt: skip
-    reproduce.add_argument("--out", type=Path, default=Path("reports"), help="report folder")
+    reproduce.add_argument(
+        "--cases-dir", type=Path, metavar="DIR",
+        help="folder of case files (.json, .poly, .py); default the paper's four",
+    )  # fmt: skip
+    _study_options(reproduce, Path("reports"))
     reproduce.set_defaults(run=_run_reproduce)
+
+    study = command("study", "run a study (cases x methods x parameters) and write its report")
+    study.add_argument(
+        "definition", metavar="DEFINITION",
+        help="study definition (.toml or .json), or the name of a shipped one "
+             "(paper, iterations)",
+    )  # fmt: skip
+    study.add_argument("--case", action="append", dest="cases", metavar="NAME",
+                       help="only this case (repeatable)")
+    study.add_argument("--cases-dir", type=Path, metavar="DIR",
+                       help="folder of case files (default: the definition's)")
+    _study_options(study, None)
+    study.set_defaults(run=_run_study)
 
     bench = command("bench", "time bubblemesh against the peer meshers")
     bench.add_argument("--max-elements", type=_whole(1), metavar="N", help="largest mesh size")
@@ -303,28 +321,34 @@ def _plot(points, triangles, path: Path) -> None:
     plt.close(figure)
 
 
+def _study_options(parser: argparse.ArgumentParser, out: Path | None) -> None:
+    """The options of the commands that run a study on dask."""
+    parser.add_argument(
+        "--scheduler", metavar="ADDRESS",
+        help="dask scheduler, e.g. tcp://HOST:PORT (default: $BUBBLEMESH_SCHEDULER, else a "
+             "local cluster of 2 worker processes); 'inline' runs in this process",
+    )  # fmt: skip
+    parser.add_argument(
+        "--out", type=Path, default=out, metavar="DIR",
+        help="results and report folder" + (f" (default {out}/)" if out else
+                                             " (default studies/NAME/)"),
+    )  # fmt: skip
+    parser.add_argument("--retry-failed", action="store_true",
+                        help="compute failed and skipped cells again")
+
+
 def _import_cases_module(name: str):
+    """``bubblemesh.studies.<name>``; a missing optional package is a one-line error."""
     import importlib
 
     try:
-        return importlib.import_module(f"cases.{name}")
+        return importlib.import_module(f"bubblemesh.studies.{name}")
     except ModuleNotFoundError as error:
-        if error.name not in ("cases", f"cases.{name}"):
+        if error.name is None or error.name.startswith("bubblemesh"):
             raise
         raise CommandError(
-            f"'bubblemesh {name}' needs the repository's cases package (cases/{name}.py): "
-            "run it from a checkout installed with pip install -e ."
+            f"'bubblemesh {name}' needs {error.name}: pip install 'bubblemesh[studies]'"
         ) from None
-
-
-def _check_case_names(names: list[str]) -> None:
-    """Every name is one of ``cases.ALL`` (when the package lists its cases)."""
-    known = getattr(sys.modules.get("cases"), "ALL", None)
-    if known is None:
-        return
-    unknown = [name for name in names if name not in known]
-    if unknown:
-        raise UsageError(f"unknown case {unknown[0]!r}; known: {', '.join(known)}")
 
 
 def _exit_status(result) -> int:
@@ -340,10 +364,52 @@ def _run_check(args: argparse.Namespace) -> int:
         raise UsageError(f"cannot read the input: {error}") from None
 
 
+def _check_scheduler(address: str | None) -> None:
+    if address not in (None, "inline") and "://" not in str(address):
+        raise UsageError(f"--scheduler {address!r}: expected tcp://HOST:PORT or 'inline'")
+
+
 def _run_reproduce(args: argparse.Namespace) -> int:
+    _check_scheduler(args.scheduler)
     reproduce = _import_cases_module("reproduce")
-    _check_case_names(args.cases or [])
-    return _exit_status(reproduce.main(cases=args.cases, out=args.out))
+    reproduce.paper_study(args.cases, args.cases_dir)  # unknown case or folder: fail now
+    if args.scheduler != "inline":
+        _needs("distributed", "reproduce")
+    _needs("matplotlib", "reproduce")
+    return _exit_status(reproduce.main(cases=args.cases, out=args.out, cases_dir=args.cases_dir,
+                                       scheduler=args.scheduler,
+                                       retry_failed=args.retry_failed))
+
+
+def _needs(module: str, command: str) -> None:
+    import importlib
+
+    try:
+        importlib.import_module(module)
+    except ImportError:
+        raise CommandError(f"'bubblemesh {command}' needs {module}: "
+                           "pip install 'bubblemesh[studies]'") from None
+
+
+def _run_study(args: argparse.Namespace) -> int:
+    _check_scheduler(args.scheduler)
+    studies = _import_cases_module("study")
+    study = studies.load_study(args.definition, cases_dir=args.cases_dir,
+                               only_cases=args.cases)
+    if args.scheduler != "inline":
+        _needs("distributed", "study")
+    _needs("matplotlib", "study")
+    out = args.out if args.out is not None else Path("studies") / study.name
+    run = _import_cases_module("engine").run_study(study, out, scheduler=args.scheduler,
+                                                   retry_failed=args.retry_failed)
+    given = "".join(f" --case {n}" for n in args.cases or ())
+    where = f" --cases-dir {args.cases_dir}" if args.cases_dir is not None else ""
+    command = f"bubblemesh study {args.definition}{given}{where} --out {out}/"
+    _import_cases_module("report").render(study, run.table, out, run, command)
+    failed = int((run.table["status"] != "ok").sum())
+    print(f"{study.name}: {len(run.table)} cells, {run.computed} computed, {run.reused} reused"
+          + (f", {failed} not ok" if failed else "") + f"; report {out / 'README.md'}")
+    return 0
 
 
 def _run_bench(args: argparse.Namespace) -> int:

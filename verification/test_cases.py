@@ -1,11 +1,12 @@
-"""The case studies of the paper's Figs. 3-6 and the speed benchmark harness.
+"""The case studies of the paper's Figs. 3-6 (shipped as data) and the speed benchmark harness.
 
 Geometry: each case is the domain of its figure (node counts, spacing, nodes
 on the exact curves, areas against closed forms and shapely, holes inside the
 outer loop).  Peers: same boundary nodes, element count matched, a missing
-peer is skipped.  Pipeline: ``reproduce.main`` on one case writes the CSV and
+peer is skipped.  Pipeline: ``reproduce.main`` on one case writes the results and
 every number in it is recomputed here from the written VTU files with formulas
-independent of ``bubblemesh.quality``.
+independent of ``bubblemesh.quality``.  The case files are JSON coordinates: the tests
+check them against the closed forms of their curves, not against the code that wrote them.
 """
 
 from __future__ import annotations
@@ -15,8 +16,13 @@ import math
 import numpy as np
 import pytest
 
-import cases
-from cases import geometry
+from bubblemesh.studies import geometry, paper_cases
+
+ALL = paper_cases()
+
+
+def _loops(name):
+    return [np.asarray(loop) for loop in ALL[name].loops]
 
 REQUIRED_COLUMNS = [
     "case", "method", "status", "elements", "nodes", "rho_min", "rho_mean", "rho_median",
@@ -37,15 +43,16 @@ def _regular_polygon_area(n, r):
 
 
 def test_registry_has_the_four_paper_cases_in_order():
-    assert list(cases.ALL) == [
+    assert list(ALL) == [
         "fig3_circle",
         "fig4_square_hole",
         "fig5_rect_two_holes",
         "fig6_arbitrary_two_holes",
     ]
-    for name, mod in cases.ALL.items():
-        assert mod.NAME == name and isinstance(mod.TITLE, str) and mod.TITLE
-        loops = mod.loops()
+    for name, case in ALL.items():
+        assert case.name == name and isinstance(case.title, str) and case.title
+        assert case.metadata["paper"]["low_elements"] in ("none", "few")
+        loops = case.loops
         assert all(lp.ndim == 2 and lp.shape[1] == 2 and lp.dtype == np.float64 for lp in loops)
         assert geometry.signed_area(loops[0]) > 0, "outer loop counter-clockwise"
         assert all(geometry.signed_area(h) < 0 for h in loops[1:]), "holes clockwise"
@@ -54,12 +61,14 @@ def test_registry_has_the_four_paper_cases_in_order():
 
 
 def test_unknown_case_names_the_known_ones():
-    with pytest.raises(KeyError, match="fig3_circle"):
-        cases.get("fig99")
+    from bubblemesh.studies.reproduce import paper_study
+
+    with pytest.raises(ValueError, match="unknown case 'fig99'; known: fig3_circle"):
+        paper_study(["fig99"])
 
 
 def test_fig3_circle():
-    (outer,) = cases.get("fig3_circle").loops()
+    (outer,) = _loops("fig3_circle")
     assert len(outer) == 64
     np.testing.assert_allclose(np.hypot(*outer.T), 1.0, atol=1e-14)
     s = _spacing(outer)
@@ -68,7 +77,7 @@ def test_fig3_circle():
 
 
 def test_fig4_square_hole():
-    outer, hole = cases.get("fig4_square_hole").loops()
+    outer, hole = _loops("fig4_square_hole")
     assert len(outer) == 64 and len(hole) == 48
     np.testing.assert_allclose(_spacing(outer), 0.125, rtol=1e-12)
     assert np.abs(outer).max() == 1.0
@@ -83,7 +92,7 @@ def test_fig4_square_hole():
 
 
 def test_fig5_rect_two_holes():
-    outer, h1, h2 = cases.get("fig5_rect_two_holes").loops()
+    outer, h1, h2 = _loops("fig5_rect_two_holes")
     assert (len(outer), len(h1), len(h2)) == (60, 40, 40)
     np.testing.assert_allclose(_spacing(outer), 0.2, rtol=1e-12)
     np.testing.assert_allclose(np.hypot(h1[:, 0] - 1, h1[:, 1] - 1), 0.4, atol=1e-14)
@@ -94,7 +103,7 @@ def test_fig5_rect_two_holes():
 
 
 def test_fig6_arbitrary_two_holes_nodes_on_the_curves_at_the_spacing():
-    outer, ellipse, tri = cases.get("fig6_arbitrary_two_holes").loops()
+    outer, ellipse, tri = _loops("fig6_arbitrary_two_holes")
     # outer: x = 1.3 r(t) cos t, y = r(t) sin t  =>  t = atan2(y, x/1.3), r = hypot(x/1.3, y)
     t = np.arctan2(outer[:, 1], outer[:, 0] / 1.3)
     r = 1 + 0.25 * np.cos(3 * t) + 0.1 * np.sin(5 * t)
@@ -116,7 +125,7 @@ def test_fig6_arbitrary_two_holes_nodes_on_the_curves_at_the_spacing():
 
 
 def test_fig6_outer_area_close_to_the_curve_area():
-    (outer, *_) = cases.get("fig6_arbitrary_two_holes").loops()
+    (outer, *_) = _loops("fig6_arbitrary_two_holes")
     t = np.linspace(0, 2 * np.pi, 200001)
     r = 1 + 0.25 * np.cos(3 * t) + 0.1 * np.sin(5 * t)
     f = r * r
@@ -129,8 +138,8 @@ def test_holes_inside_outer_and_apart_shapely():
     shapely = pytest.importorskip("shapely")
     from shapely.geometry import Polygon
 
-    for name, mod in cases.ALL.items():
-        outer, *holes = mod.loops()
+    for name in ALL:
+        outer, *holes = _loops(name)
         po = Polygon(outer)
         assert po.is_valid, name
         hp = [Polygon(h) for h in holes]
@@ -147,8 +156,8 @@ def test_holes_inside_outer_and_apart_shapely():
 
 def test_cases_build_a_bubblemesh_domain():
     bm = pytest.importorskip("bubblemesh")
-    for name, mod in cases.ALL.items():
-        loops = mod.loops()
+    for name in ALL:
+        loops = _loops(name)
         dom = bm.Domain.from_loops(loops)
         area = geometry.signed_area(loops[0]) + sum(geometry.signed_area(h) for h in loops[1:])
         assert dom.area == pytest.approx(area, rel=1e-12), name
@@ -203,9 +212,9 @@ def test_independent_formulas_agree_on_known_triangles():
 @pytest.mark.parametrize("name", ["triangle", "gmsh_frontal", "gmsh_delaunay"])
 def test_generators_keep_the_boundary_nodes_and_match_the_count(name):
     pytest.importorskip({"triangle": "triangle"}.get(name, "gmsh"))
-    from cases import peers
+    from bubblemesh.studies import peers
 
-    loops = cases.get("fig4_square_hole").loops()
+    loops = _loops("fig4_square_hole")
     p, t, sec, info = peers.run_peer(name, loops, 1300)
     assert info["status"] == "ok", info
     assert sec >= 0 and abs(len(t) / 1300 - 1) < 0.1, info["runs"]
@@ -221,8 +230,8 @@ def test_generators_keep_the_boundary_nodes_and_match_the_count(name):
 @pytest.mark.peers
 def test_triangle_area_bound_is_written_without_exponent():
     pytest.importorskip("triangle")
-    from cases import peers
-    from cases.geometry import circle
+    from bubblemesh.studies import peers
+    from bubblemesh.studies.geometry import circle
 
     assert peers.triangle_number(3.13864e-05) == "0.0000313864"
     assert peers.triangle_number(0.00205251234) == "0.00205251"
@@ -238,9 +247,9 @@ def test_a_tuned_run_repeats_with_its_parameter():
     the same mesh on every fresh run, of about the tuned size."""
     pytest.importorskip("triangle")
     pytest.importorskip("gmsh")
-    from cases import peers
+    from bubblemesh.studies import peers
 
-    loops = cases.get("fig3_circle").loops()
+    loops = _loops("fig3_circle")
     p, t, _, info = peers._triangle(loops, 900)
     assert len(info["runs"]) > 1  # really tuned: 900 is not the first run's count
     p1, t1, _, _ = peers._triangle(loops, 900, area=info["parameter"], tuning_runs=1)
@@ -258,7 +267,7 @@ def test_a_tuned_run_repeats_with_its_parameter():
 
 def _base_mesh(loops):
     tr = pytest.importorskip("triangle")
-    from cases import peers
+    from bubblemesh.studies import peers
 
     pts, segs = peers._segments(loops)
     data = {"vertices": pts, "segments": segs, "holes": peers.hole_points(loops)}
@@ -269,9 +278,9 @@ def _base_mesh(loops):
 @pytest.mark.peers
 def test_laplacian_cross_check_against_pymeshlab():
     pytest.importorskip("pymeshlab")
-    from cases import peers
+    from bubblemesh.studies import peers
 
-    loops = cases.get("fig4_square_hole").loops()
+    loops = _loops("fig4_square_hole")
     bp, bt = _base_mesh(loops)
     nb = sum(len(lp) for lp in loops)
     p, t, _, info = peers.run_peer(
@@ -292,9 +301,9 @@ def test_laplacian_cross_check_against_pymeshlab():
 @pytest.mark.peers
 def test_pymeshlab_remesh_keeps_the_boundary_and_the_free_variant_reports_its_shift():
     pytest.importorskip("pymeshlab")
-    from cases import peers
+    from bubblemesh.studies import peers
 
-    loops = cases.get("fig5_rect_two_holes").loops()
+    loops = _loops("fig5_rect_two_holes")
     bp, bt = _base_mesh(loops)
     p, t, _, info = peers.run_peer("pymeshlab_remesh", loops, len(bt), base=(bp, bt))
     assert info["status"] == "ok"
@@ -307,9 +316,9 @@ def test_pymeshlab_remesh_keeps_the_boundary_and_the_free_variant_reports_its_sh
 
 
 def test_missing_or_unusable_peer_is_skipped_not_raised(monkeypatch):
-    from cases import peers
+    from bubblemesh.studies import peers
 
-    loops = cases.get("fig3_circle").loops()
+    loops = _loops("fig3_circle")
     monkeypatch.setitem(peers._PACKAGE, "triangle", "no_such_package_for_bubblemesh_tests")
     p, t, sec, info = peers.run_peer("triangle", loops, 700)
     assert (p, t) == (None, None) and math.isnan(sec)
@@ -325,7 +334,7 @@ def test_missing_or_unusable_peer_is_skipped_not_raised(monkeypatch):
 
 def _frame(rows):
     pd = pytest.importorskip("pandas")
-    from cases.reproduce import COLUMNS
+    from bubblemesh.studies.results import COLUMNS
 
     base = dict.fromkeys(COLUMNS)
     return pd.DataFrame(
@@ -340,7 +349,7 @@ def _q(case, method, mean, n07, n=1000, rmin=0.5):
 
 
 def test_findings_are_computed_from_the_numbers():
-    from cases.report import findings, ranking
+    from bubblemesh.studies.report import claims, findings, ranking
 
     df = _frame([
         _q("fig4_square_hole", "bubblemesh_delaunay", 0.85, 120),
@@ -349,7 +358,8 @@ def test_findings_are_computed_from_the_numbers():
         _q("fig5_rect_two_holes", "bubblemesh_optimized", 0.86, 110),
         _q("fig5_rect_two_holes", "gmsh_frontal", 0.97, 0),
     ])  # fmt: skip
-    f = findings(df)
+    paper = claims(ALL.values())
+    f = findings(df, paper=paper)
     text = " ".join(s for _, s in f)
     verdict = {}  # the first sentence about a case is its Delaunay-vs-optimised verdict
     for k, s in f:
@@ -366,8 +376,8 @@ def test_findings_are_computed_from_the_numbers():
         _q("fig4_square_hole", "bubblemesh_delaunay", 0.9, 10),
         _q("fig4_square_hole", "bubblemesh_optimized", 0.8, 300),
     ])  # fmt: skip
-    f = dict(findings(worse)[:2][::-1])
-    assert "disagree" in f and any("no improvement" in s for _, s in findings(worse))
+    f = dict(findings(worse, paper=paper)[:2][::-1])
+    assert "disagree" in f and any("no improvement" in s for _, s in findings(worse, paper=paper))
 
 
 # --------------------------------------------------------------------------- whole pipeline
@@ -378,12 +388,13 @@ def test_reproduce_one_case_numbers_match_the_written_meshes(tmp_path):
     pytest.importorskip("matplotlib")
     pd = pytest.importorskip("pandas")
     meshio = pytest.importorskip("meshio")
-    from cases import peers, reproduce
+    from bubblemesh.studies import peers, reproduce
 
-    df = reproduce.main(["fig3_circle"], out=tmp_path, progress=False)
-    csv = pd.read_csv(tmp_path / "quality.csv")
-    assert list(csv.columns[: len(REQUIRED_COLUMNS)]) == REQUIRED_COLUMNS
-    assert list(csv.method) == list(reproduce.METHODS) and set(csv.case) == {"fig3_circle"}
+    df = reproduce.main(["fig3_circle"], out=tmp_path, progress=False, scheduler="inline")
+    csv = pd.read_csv(tmp_path / "results.csv")
+    assert set(REQUIRED_COLUMNS) <= set(csv.columns)
+    methods = [m.name for m in reproduce.paper_study().methods]
+    assert list(csv.method) == methods and set(csv.case) == {"fig3_circle"}
     assert len(df) == len(csv)
     for f in (
         "README.md",
@@ -395,13 +406,13 @@ def test_reproduce_one_case_numbers_match_the_written_meshes(tmp_path):
     html = (tmp_path / "index.html").read_text()
     assert "fig3_circle_histograms.png" in html and "Findings" in html
     readme = (tmp_path / "README.md").read_text()
-    assert "`bubblemesh reproduce --case fig3_circle --out reports/`" in readme
+    assert f"`bubblemesh reproduce --case fig3_circle --out {tmp_path}/`" in readme
     for word in ("issue", "not available", "stand-in", "fig3_circle:"):  # no internal labels
         assert word not in readme.lower(), word
     assert reproduce.rewrite_report(tmp_path)  # from the written files alone: the same report
     assert (tmp_path / "README.md").read_text() == readme
 
-    boundary = np.vstack(cases.get("fig3_circle").loops())
+    boundary = np.vstack(_loops("fig3_circle"))
     ok = csv[csv.status == "ok"]
     assert {"bubblemesh_delaunay", "bubblemesh_optimized"} <= set(ok.method), csv[
         ["method", "status", "reason"]
@@ -428,6 +439,7 @@ def test_reproduce_one_case_numbers_match_the_written_meshes(tmp_path):
         assert row.boundary_shift <= d + 1e-12
         if row.method != "pymeshlab_remesh_free":
             assert d <= 1e-12, row.method
+            assert row.verify == "ok", (row.method, row.verify)
         assert (p[:, 0] ** 2 + p[:, 1] ** 2 <= 1 + 1e-12).all(), row.method
         assert row.seconds >= 0
     # the optimised mesh is the better one, as in the paper
@@ -440,7 +452,7 @@ def test_reproduce_one_case_numbers_match_the_written_meshes(tmp_path):
 def test_benchmark_quick_mode_runs(tmp_path):
     pytest.importorskip("matplotlib")
     pd = pytest.importorskip("pandas")
-    from cases import benchmark
+    from bubblemesh.studies import benchmark
 
     df = benchmark.main(quick=True, out=tmp_path, progress=False)
     csv = pd.read_csv(tmp_path / "benchmark.csv")
@@ -460,7 +472,7 @@ def test_benchmark_quick_mode_runs(tmp_path):
 
 def test_histogram_range_starts_below_the_lowest_first_percentile():
     pytest.importorskip("matplotlib")
-    from cases import plots
+    from bubblemesh.studies import plots
 
     rng = np.random.default_rng(7)
     good, poor = 1 - 0.1 * rng.random(1000), 0.3 + 0.7 * rng.random(1000)
@@ -474,7 +486,7 @@ def test_histogram_range_starts_below_the_lowest_first_percentile():
 
 
 def test_boundary_nodes_for_calibration():
-    from cases import benchmark
+    from bubblemesh.studies import benchmark
 
     assert benchmark.boundary_nodes_for(1_000_000) == pytest.approx(2333, abs=5)
     assert benchmark.boundary_nodes_for(10) == 12
@@ -482,7 +494,7 @@ def test_boundary_nodes_for_calibration():
 
 def test_speed_targets_are_judged_from_the_rows():
     pd = pytest.importorskip("pandas")
-    from cases import benchmark
+    from bubblemesh.studies import benchmark
 
     rows = [
         ("bubblemesh_generate", 1_000_000, 0.9, 1.5, 500.0),

@@ -233,60 +233,53 @@ def test_warnings_are_one_line_each(poly, tmp_path, capsys, monkeypatch):
     assert lines[1] == "bubblemesh mesh: error: stopped"
 
 
-def fake_cases_module(monkeypatch, name: str, returns=None) -> list:
+def fake_studies_module(monkeypatch, name: str, returns=None) -> list:
+    """Replace bubblemesh.studies.<name> by a module whose main records its options."""
     calls: list = []
-    module = types.ModuleType(f"cases.{name}")
+    module = types.ModuleType(f"bubblemesh.studies.{name}")
     module.main = lambda **kwargs: calls.append(kwargs) or returns  # type: ignore[attr-defined]
-    monkeypatch.setitem(sys.modules, f"cases.{name}", module)
+    module.paper_study = lambda cases, cases_dir: None  # type: ignore[attr-defined]
+    monkeypatch.setitem(sys.modules, f"bubblemesh.studies.{name}", module)
     return calls
 
 
-def fake_cases_package(monkeypatch, names) -> None:
-    package = types.ModuleType("cases")
-    package.ALL = dict.fromkeys(names)  # type: ignore[attr-defined]
-    monkeypatch.setitem(sys.modules, "cases", package)
-
-
-def test_reproduce_passes_cases_and_out(monkeypatch, tmp_path):
-    fake_cases_package(monkeypatch, ["fig3", "fig5"])
-    calls = fake_cases_module(monkeypatch, "reproduce")
-    assert main(["reproduce", "--case", "fig3", "--case", "fig5", "--out", str(tmp_path)]) == 0
-    assert calls == [{"cases": ["fig3", "fig5"], "out": tmp_path}]
-    assert main(["reproduce"]) == 0
-    assert calls[-1] == {"cases": None, "out": Path("reports")}
+def test_reproduce_passes_its_options(monkeypatch, tmp_path):
+    calls = fake_studies_module(monkeypatch, "reproduce")
+    argv = ["reproduce", "--case", "fig3", "--case", "fig5", "--out", str(tmp_path),
+            "--scheduler", "inline"]
+    assert main(argv) == 0
+    assert calls == [{"cases": ["fig3", "fig5"], "out": tmp_path, "cases_dir": None,
+                      "scheduler": "inline", "retry_failed": False}]
 
 
 def test_bench_passes_only_the_options_given(monkeypatch, tmp_path):
-    calls = fake_cases_module(monkeypatch, "benchmark", returns=3)
+    calls = fake_studies_module(monkeypatch, "benchmark", returns=3)
     assert main(["bench", "--quick", "--out", str(tmp_path)]) == 3
     assert calls == [{"quick": True, "out": tmp_path}]
     main(["bench", "--max-elements", "5000", "--repeats", "2"])
     assert calls[-1] == {"quick": False, "out": Path("reports"), "max_elements": 5000, "repeats": 2}
 
 
-def test_unknown_case_is_a_usage_error(monkeypatch, capsys):
-    fake_cases_package(monkeypatch, ["fig3", "fig5"])
-    calls = fake_cases_module(monkeypatch, "reproduce")
-    assert main(["reproduce", "--case", "fig3", "--case", "nope"]) == 2
-    assert "unknown case 'nope'; known: fig3, fig5" in error_line(capsys, "reproduce")
-    assert calls == []
+def test_unknown_case_is_a_usage_error_before_any_meshing(capsys, meshing):
+    assert main(["reproduce", "--case", "fig3_circle", "--case", "nope"]) == 2
+    assert "nope" in error_line(capsys, "reproduce")
+    assert meshing == []
 
 
-def test_missing_cases_package_is_a_clear_error(monkeypatch, capsys):
-    monkeypatch.setitem(sys.modules, "cases.benchmark", None)  # import fails as if absent
-    assert main(["bench", "--quick"]) == 1
-    assert "needs the repository's cases package" in error_line(capsys, "bench")
+def test_a_bad_scheduler_address_is_a_usage_error(capsys):
+    assert main(["reproduce", "--scheduler", "localhost"]) == 2
+    assert "tcp://HOST:PORT" in error_line(capsys, "reproduce")
 
 
-def test_a_package_missing_under_the_cases_is_one_line(monkeypatch, capsys):
+def test_a_missing_optional_package_is_one_line(monkeypatch, capsys):
     import importlib
 
     def import_module(name, package=None):
-        raise ModuleNotFoundError("No module named 'tqdm'", name="tqdm")
+        raise ModuleNotFoundError("No module named 'dask'", name="dask")
 
     monkeypatch.setattr(importlib, "import_module", import_module)
     assert main(["reproduce"]) == 1
-    assert "No module named 'tqdm'" in error_line(capsys, "reproduce")
+    assert "needs dask: pip install 'bubblemesh[studies]'" in error_line(capsys, "reproduce")
 
 
 @pytest.mark.parametrize(

@@ -1,7 +1,7 @@
 """Speed and memory benchmark: the unit disk from ~1k to ~1M elements.
 
     bubblemesh bench [--max-elements 1000000] [--repeats 3] [--quick] [--out reports]
-    python -m cases.benchmark ...   (the same, plus --no-serial)
+    python -m bubblemesh.studies.benchmark ...   (the same, plus --no-serial)
 
 The unit disk with ``n`` uniformly spaced boundary nodes; bubblemesh's §2 mesh
 of it has ``C_DISK · n²`` elements (C_DISK measured: 0.1838, constant from 64
@@ -22,8 +22,8 @@ final re-triangulation) and ``bubblemesh_total`` (both), with numba's default
 threads, and ``bubblemesh_optimize_1thread`` / ``bubblemesh_total_1thread``
 with ``NUMBA_NUM_THREADS=1`` (what the parallel loops gain, or cost on a busy
 machine; not in quick mode); ``triangle``
-(``cases.peers``' Triangle run, ``pq30a<A>YQ``, A tuned untimed to the §2 element
-count); ``gmsh_frontal`` (``cases.peers``' Gmsh run with ``Mesh.Algorithm=6`` and a
+(:mod:`bubblemesh.studies.peers`' Triangle run, ``pq30a<A>YQ``, A tuned untimed to the §2 element
+count); ``gmsh_frontal`` (the peers' Gmsh run with ``Mesh.Algorithm=6`` and a
 uniform size tuned untimed to the same count; only up to ``GMSH_CAP`` elements, as it
 is far slower).  ``ratio_to_triangle`` is the
 per-element time over Triangle's at the same size.  The cold numba compile
@@ -42,6 +42,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -82,9 +83,14 @@ def boundary_nodes_for(target: int) -> int:
 
 
 def _disk(n):
-    from cases.geometry import circle
+    from .geometry import circle
 
     return [circle((0.0, 0.0), 1.0, n)]
+
+
+def _root() -> str:
+    """The folder holding the bubblemesh package: the children import the same copy."""
+    return str(Path(__file__).resolve().parents[2])
 
 
 def _rss_mb() -> float:
@@ -213,7 +219,7 @@ def _child_iterations(n, repeats):
 
 
 def _child_triangle(n, repeats, target):
-    from cases import peers
+    from . import peers
 
     loops = _disk(n)
     peers._triangle(_disk(12), 20, tuning_runs=1)  # warm-up
@@ -223,7 +229,7 @@ def _child_triangle(n, repeats, target):
 
 
 def _child_gmsh(n, repeats, target):
-    from cases import peers
+    from . import peers
 
     loops = _disk(n)
     peers._gmsh(_disk(12), 20, 6, uniform=True, tuning_runs=1)  # warm-up
@@ -237,6 +243,7 @@ def _timed(method, repeats, peer, *args, **kwargs) -> dict:
     (package start-up excluded) and the peak memory they reached."""
     base = _rss_mb()
     seconds = []
+    out: Any = None
     for _ in range(repeats):
         out = None  # one mesh alive at a time: the peak is one run's
         out = peer(*args, **kwargs)
@@ -263,8 +270,8 @@ def _child(spec: dict) -> list[dict]:
 
 
 def _run_child(spec: dict, timeout: float, env=None) -> list[dict]:
-    cmd = [sys.executable, "-m", "cases.benchmark", "--child", json.dumps(spec)]
-    root = str(Path(__file__).resolve().parent.parent)
+    cmd = [sys.executable, "-m", "bubblemesh.studies.benchmark", "--child", json.dumps(spec)]
+    root = _root()
     env = dict(os.environ if env is None else env)
     env["PYTHONPATH"] = root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
     try:
@@ -286,11 +293,11 @@ def _threading_info() -> dict:
     """numba's threading layer and thread count in a child (as the measurements ran), plus the
     environment variables that change them."""
     code = (
-        "import bubblemesh as bm, numba; from cases.geometry import circle;"
+        "import bubblemesh as bm, numba; from bubblemesh.studies.geometry import circle;"
         "bm.mesh(bm.Domain.from_loops([circle((0,0),1,16)]), paper=True);"
         "print(numba.threading_layer(), numba.get_num_threads())"
     )
-    root = str(Path(__file__).resolve().parent.parent)
+    root = _root()
     info: dict[str, str] = {
         k: os.environ[k]
         for k in (
@@ -320,13 +327,13 @@ def compile_times(timeout: float = 900) -> dict:
     """First-call time of generate+optimize on a tiny disk in a fresh process: with an empty
     numba cache (cold: compile everything) and again with the cache it filled (warm)."""
     code = (
-        "import time; t0=time.perf_counter(); import bubblemesh as bm; from cases.geometry import "
-        "circle;"
+        "import time; t0=time.perf_counter(); import bubblemesh as bm; "
+        "from bubblemesh.studies.geometry import circle;"
         "t1=time.perf_counter(); "
         "bm.mesh(bm.Domain.from_loops([circle((0,0),1,16)]), paper=True);"
         "t2=time.perf_counter(); print(t1-t0, t2-t1)"
     )
-    root = str(Path(__file__).resolve().parent.parent)
+    root = _root()
     out: dict[str, float | str] = {}
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache, PYTHONPATH=root)
@@ -435,8 +442,8 @@ def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress
     import pandas as pd
     from tqdm import tqdm
 
-    from cases import plots
-    from cases.reproduce import environment
+    from . import plots
+    from .report import environment
 
     out = Path(out)
     (out / "figures").mkdir(parents=True, exist_ok=True)
@@ -542,7 +549,7 @@ def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress
     for m, s in slopes.items():
         print(f"log-log slope of seconds vs elements (>= {SLOPE_FROM} elements), {m}: {s:.3f}")
     print(f"compile: {meta['compile']}")
-    from cases.reproduce import rewrite_report
+    from .reproduce import rewrite_report
 
     if rewrite_report(out):  # the case report shows the benchmark: refresh it
         print(f"report refreshed: {out / 'index.html'}")
@@ -553,7 +560,7 @@ def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress
 
 def _cli(argv=None):
     ap = argparse.ArgumentParser(
-        prog="python -m cases.benchmark", description=__doc__.split("\n\n")[0]
+        prog="python -m bubblemesh.studies.benchmark", description=__doc__.split("\n\n")[0]
     )
     ap.add_argument("--max-elements", type=int, default=1_000_000)
     ap.add_argument("--repeats", type=int, default=3)

@@ -1,7 +1,7 @@
 """Quality study of the robust mesher bm.mesh against Triangle -pq30 and Gmsh
 Frontal-Delaunay (Mesh.Algorithm=6) on the same input at matched element counts.
 
-    PYTHONPATH=. python cases/quality_study.py [--data DIR] [--big]
+    python -m bubblemesh.studies.quality [--data DIR] [--big]
 
 ``--data``: a folder with Triangle's example A.poly and double_hex3.poly (from
 Triangle's distribution; skipped if absent).  Prints one table row per case

@@ -125,7 +125,7 @@ def hole_points(loops: Sequence[np.ndarray]) -> np.ndarray:
 
 
 def _domain_area(loops: Sequence[np.ndarray]) -> float:
-    from cases.geometry import signed_area
+    from .geometry import signed_area
 
     return abs(signed_area(loops[0])) - sum(abs(signed_area(lp)) for lp in loops[1:])
 
@@ -466,8 +466,8 @@ def _laplacian_uniform(base, n_boundary, steps):
         bt.copy(),
         sec,
         {
-            "options": f"cases.peers.laplacian_smooth(steps={steps}): x <- mean of neighbours, "
-            "boundary fixed",
+            "options": f"bubblemesh.studies.peers.laplacian_smooth(steps={steps}): "
+            "x <- mean of neighbours, boundary fixed",
         },
     )
 

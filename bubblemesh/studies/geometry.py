@@ -1,4 +1,4 @@
-"""Boundary-node builders shared by the case modules.
+"""Boundary-node builders for case files written as formulas (``NAME.py`` cases).
 
 Every builder returns an ``(n, 2)`` float64 array of boundary nodes, the loop
 closed implicitly (the last node is *not* a repeat of the first).  The outer

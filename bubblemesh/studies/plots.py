@@ -229,3 +229,41 @@ def benchmark(path, df, labels):
                  fontsize=10)
     fig.tight_layout(rect=(0, 0.1, 1, 1))
     _save(fig, path)
+
+
+QUALITY = (("rho_mean", "mean ρ"), ("rho_min", "min ρ"),
+           ("pct_below_0_7", f"% of elements < {LOW}"))
+
+
+def quality_against(path, df, labels, case_labels, axis, title):
+    """Quality (rows: mean ρ, min ρ, % below 0.7) against ``df['x']``, one column per case,
+    a line per method (rows with status ok and an x value)."""
+    ok = df[(df["status"] == "ok") & df["x"].notna()]
+    cases = list(dict.fromkeys(ok["case"]))
+    fig, axes = plt.subplots(len(QUALITY), max(1, len(cases)), figsize=(3.4 * max(1, len(cases)),
+                             2.6 * len(QUALITY)), sharex=True, squeeze=False)  # fmt: skip
+    colors: dict[str, str] = {}
+    for j, case in enumerate(cases):
+        for method, g in ok[ok["case"] == case].groupby("method", sort=False):
+            g = g.sort_values("x")
+            for i, (column, _) in enumerate(QUALITY):
+                (line,) = axes[i, j].plot(g["x"], g[column], marker="o", ms=2.5, lw=1,
+                                          label=labels.get(method, method),
+                                          color=colors.get(method))
+                colors.setdefault(method, line.get_color())
+        axes[0, j].set_title(case_labels.get(case, case), fontsize=9)
+        axes[-1, j].set_xlabel(axis, fontsize=8)
+    x = ok["x"].astype(float)
+    for a in axes.flat:
+        if len(x) and x.min() > 0 and x.max() / x.min() >= 20:
+            a.set_xscale("log")
+        a.tick_params(labelsize=7)
+        a.grid(True, alpha=0.3)
+    for i, (_, name) in enumerate(QUALITY):
+        axes[i, 0].set_ylabel(name, fontsize=8)
+    handles, names = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, names, loc="lower center", ncol=min(4, len(names)), fontsize=8,
+               frameon=False)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout(rect=(0, 0.06, 1, 1))
+    _save(fig, path)

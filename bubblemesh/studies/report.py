@@ -11,21 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
-# What the paper says about each figure (§4), the claims the findings test.
-PAPER = {
-    "fig3_circle": "Fig. 3: the optimized mesh is of high quality (no low-quality elements are "
-    "singled out).",
-    "fig4_square_hole": "Fig. 4: the optimized mesh is much better, but a few elements below ρ = "
-    "0.7 remain.",
-    "fig5_rect_two_holes": "Fig. 5: the optimized mesh is much better, but a few elements below ρ "
-    "= 0.7 remain.",
-    "fig6_arbitrary_two_holes": "Fig. 6: the optimization is also feasible for a complicated "
-    "geometry.",
-}
-FEW_LOW = {
-    "fig4_square_hole",
-    "fig5_rect_two_holes",
-}  # §4: "still few elements with low radius ratio"
+# What the paper says about each figure (§4) is in each case's metadata: ``paper.claim``
+# (the sentence) and ``paper.low_elements`` ("few": §4's "still few elements with low
+# radius ratio"; "none": the paper singles out no low elements); ``claims`` collects them.
 FEW_PCT = 5.0  # "a few" = more than none and at most this % of the elements
 MUCH_BETTER_PCT = 0.5  # "much better": elements below 0.7 at most halved ...
 MUCH_BETTER_MEAN = 0.03  # ... and mean ρ up by at least this
@@ -67,9 +55,16 @@ def _n(count, word="element"):
     return f"{count} {word}" + ("" if count == 1 else "s")
 
 
-def findings(df, labels=None, case_labels=None):
+def claims(cases) -> dict[str, dict]:
+    """``paper`` metadata of each case that has it (name -> {claim, low_elements})."""
+    return {c.name: dict(c.metadata["paper"]) for c in cases if "paper" in c.metadata}
+
+
+def findings(df, labels=None, case_labels=None, paper=None):
     """Plain-language findings, (kind, sentence) with kind agree/disagree/info, from the data.
-    ``labels`` / ``case_labels`` name the methods / cases (default: their keys)."""
+    ``labels`` / ``case_labels`` name the methods / cases (default: their keys); ``paper``
+    maps a case to its claims (see ``claims``)."""
+    paper = paper or {}
     labels = labels or {}
     lab = lambda m: labels.get(m, m)  # noqa: E731
     cl = lambda c: (case_labels or {}).get(c, c)  # noqa: E731
@@ -103,7 +98,8 @@ def findings(df, labels=None, case_labels=None):
             out.append(("disagree", base + ": no improvement, unlike the paper."))
         verb = "stays" if int(o.n_below_0_7) == 1 else "stay"
         low = f"{_n(o.n_below_0_7)} of the optimized mesh {verb} below 0.7 ({o.pct_below_0_7:.1f}%)"
-        if key in FEW_LOW:
+        expected = paper.get(key, {}).get("low_elements")
+        if expected == "few":
             if o.n_below_0_7 == 0:
                 out.append(
                     (
@@ -116,7 +112,7 @@ def findings(df, labels=None, case_labels=None):
                 out.append(("agree", f"{case}: {low}, the few the paper reports for this figure."))
             else:
                 out.append(("disagree", f"{case}: {low}, more than the paper's few."))
-        elif key in PAPER:
+        elif expected is not None:
             kind = "agree" if o.pct_below_0_7 <= FEW_PCT else "disagree"
             out.append(
                 (
@@ -322,7 +318,7 @@ def _benchmark(out: Path):
 
     import pandas as pd
 
-    from cases.benchmark import LABELS
+    from .benchmark import LABELS
 
     csv = out / "benchmark.csv"
     if not csv.exists():
@@ -330,7 +326,7 @@ def _benchmark(out: Path):
     b = pd.read_csv(csv)
     path = out / "benchmark.json"
     m = json.loads(path.read_text()) if path.exists() else {}
-    blocks = [("h2", "Speed benchmark"), ("p", _bench_command(m))]
+    blocks: list = [("h2", "Speed benchmark"), ("p", _bench_command(m))]
     if (out / "figures" / "benchmark.png").exists():
         blocks.append(("img", "figures/benchmark.png", "benchmark: seconds and elements/s"))
     cols = [(k, h) for k, h in BENCH_COLS if k in b.columns]
@@ -375,7 +371,7 @@ def _bench_command(m: dict) -> str:
 
 def _benchmark_notes(m: dict, labels) -> list[str]:
     """Sentences from benchmark.json: when and where it ran, slopes, compile times, caps."""
-    from cases.benchmark import phase_name
+    from .benchmark import phase_name
 
     if not m:
         return []
@@ -512,26 +508,126 @@ def _html(blocks, title) -> str:
     return "\n".join(out + ["</body></html>"]) + "\n"
 
 
-def _short(mod) -> str:
-    """'Fig. 3' from a case TITLE 'Fig. 3: ...' (the case's name when it has no such title)."""
-    return getattr(mod, "TITLE", mod.NAME).split(":")[0]
+def environment() -> dict:
+    """When and where this ran: date, platform, CPU, and the packages' versions."""
+    import datetime as dt
+    import os
+    import platform
+
+    from .study import versions
+
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as fh:
+            cpu = next((line.split(":", 1)[1].strip() for line in fh
+                        if line.startswith("model name")), cpu)
+    except OSError:
+        pass
+    found = versions()
+    for package in ("matplotlib", "shapely", "pyarrow"):
+        from importlib import metadata
+
+        try:
+            found[package] = metadata.version(package)
+        except metadata.PackageNotFoundError:
+            found[package] = "not installed"
+    return {"date": dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z"),
+            "platform": platform.platform(), "cpu": cpu, "cpu_count": os.cpu_count(),
+            "versions": found}
 
 
-def _reproduce_command(names, all_cases) -> str:
-    only = "" if list(names) == list(all_cases) else "".join(f" --case {n}" for n in names)
-    return f"bubblemesh reproduce{only} --out reports/"
+def run_meta(study, run, command: str) -> dict:
+    """The run record written beside the results (``<study>.run.json``) and read by reports."""
+    meta = environment()
+    source = study.cases[0].source
+    meta.update(study=study.name, definition=study.source, command=command,
+                cases=[c.name for c in study.cases],
+                cases_dir=str(Path(source).resolve().parent) if source else None)
+    if run is not None:
+        meta.update(computed=run.computed, reused=run.reused, where=run.where,
+                    workers=run.workers, timing=run.timing, total_seconds=run.seconds,
+                    warm_up_seconds=run.warm_up_seconds)
+    return meta
 
 
-def write(out: Path, df, figs, meta, case_mods, labels):
-    """README.md and index.html in ``out``, from the rows, figures and run metadata."""
-    import cases as _cases
-
-    out = Path(out)
-    case_labels = {n: _short(m) for n, m in case_mods.items()}
-    word = {"agree": "agrees", "disagree": "differs"}
+def _how_it_ran(meta: dict) -> str:
+    """One paragraph: when, how long, on what, which cells were reused, how timing was kept."""
     warm = meta.get("warm_up_seconds")
+    text = (f"Generated {meta['date']} in {meta.get('total_seconds', float('nan')):.1f} s"
+            + (f", {warm:.1f} s of it loading or compiling the numba kernels" if warm else "")
+            + ".")
+    if meta.get("computed") is not None:
+        reused = meta.get("reused", 0)
+        text += (f" {meta['computed']} cells were computed on {meta.get('where')}"
+                 + (f" and {reused} taken from earlier runs of the same cells (same case, "
+                    "method, parameters and bubblemesh version)" if reused else "") + ".")
+    if meta.get("timing"):
+        text += " " + meta["timing"]
+    return text
+
+
+def _read_vtu(out: Path, name: str):
+    import meshio
+
+    m = meshio.read(out / name)
+    radius = m.point_data.get("radius")
+    return (np.asarray(m.points)[:, :2], np.asarray(m.cells_dict["triangle"], dtype=np.int64),
+            None if radius is None else np.asarray(radius),
+            np.asarray(m.cell_data["radius_ratio"][0]))
+
+
+def _paper_figures(out: Path, study, df, labels) -> dict[str, dict[str, Path]]:
+    """Per case: the paper's panels, the histograms and the meshes, from the written VTUs."""
+    from . import plots
+
+    figs: dict[str, dict[str, Path]] = {}
+    amplification = _default("amplification")
+    for case in study.cases:
+        rows = df[(df["case"] == case.name) & (df["status"] == "ok") & df["mesh_file"].notna()]
+        meshes = {r.method: _read_vtu(out, r.mesh_file) for r in rows.itertuples()
+                  if (out / r.mesh_file).exists()}
+        if not meshes:
+            continue
+        fig_dir, title, f = out / "figures", case.title, figs.setdefault(case.name, {})
+        fig_dir.mkdir(parents=True, exist_ok=True)
+        pair = [meshes.get(k) for k in ("bubblemesh_delaunay", "bubblemesh_optimized")]
+        if all(m is not None and m[2] is not None for m in pair):
+            f["panels"] = fig_dir / f"{case.name}_panels.png"
+            delaunay, optimized = (dict(points=m[0], triangles=m[1], radii=m[2], rho=m[3])
+                                   for m in pair if m is not None)
+            plots.panels(f["panels"], title, delaunay, optimized, amplification)
+        f["histograms"] = fig_dir / f"{case.name}_histograms.png"
+        plots.histograms(f["histograms"], title, {k: m[3] for k, m in meshes.items()}, labels)
+        f["meshes"] = fig_dir / f"{case.name}_meshes.png"
+        plots.meshes(f["meshes"], title, {k: (m[0], m[1], m[3]) for k, m in meshes.items()},
+                     labels)
+    return figs
+
+
+def _default(name: str):
+    import inspect
+
+    from bubblemesh import optimize
+
+    return inspect.signature(optimize).parameters[name].default
+
+
+def _laplacian_steps(study) -> str:
+    steps = sorted({str(m.params["steps"]) for m in study.methods
+                    if m.adapter.startswith("laplacian") and "steps" in m.params})
+    return f"Laplacian steps: {', '.join(steps)}." if steps else ""
+
+
+def render_paper(study, df, out: Path, meta: dict) -> list[Path]:
+    """The paper reproduction's README.md and index.html (figures redrawn from the meshes)."""
+    out = Path(out)
+    labels = study.labels
+    case_labels = {c.name: c.label for c in study.cases}
+    figs = _paper_figures(out, study, df, labels)
+    word = {"agree": "agrees", "disagree": "differs"}
+    paper = claims(study.cases)
     blocks = [
-        ("h1", "bubblemesh: the paper's Figs. 3–6 reproduced and compared"),
+        ("h1", study.title),
         ("p", "The paper “Automatic Delaunay mesh generation method and physically-based mesh "
               "optimization method on two-dimensional regions” meshes four regions (its Figs. "
               "3–6) in two stages: a Delaunay mesh whose node spacing is set by node and element "
@@ -544,30 +640,136 @@ def write(out: Path, df, figs, meta, case_mods, labels):
               "flattens. The paper counts elements below ρ = 0.7 as low quality. For each "
               "region: the paper's six panels, the ρ histogram of every method, every mesh "
               "with its elements below 0.7 in red, and the numbers."),
-        ("p", f"Regenerate with `{_reproduce_command(case_mods, _cases.ALL)}`. Numbers: "
-              "[quality.csv](quality.csv); every mesh: `meshes/*.vtu` (cell data "
-              "`radius_ratio`)."),
-        ("p", f"Generated {meta['date']} in {meta['total_seconds']:.1f} s"
-              + (f", {warm:.1f} s of it loading or compiling the numba kernels" if warm else "")
-              + "."),
+        ("p", f"Regenerate with `{meta['command']}`. Numbers: [results.csv](results.csv) "
+              "(also as `results.parquet`, one row per case and method); every mesh: "
+              "`meshes/*.vtu` (cell data `radius_ratio`)."),
+        ("p", _how_it_ran(meta)),
         ("h2", "Findings (computed from the numbers below)"),
         ("ul", [(k, f"**{word.get(k, 'note')}**: {s}")
-                for k, s in findings(df, labels, case_labels)]),
+                for k, s in findings(df, labels, case_labels, paper)]),
         ("h2", "Ranking over all cases"),
         ("table", *_rank_table(df, labels)),
     ]
-    for name, mod in case_mods.items():
-        blocks += [("h2", getattr(mod, "TITLE", name)), ("em", PAPER.get(name, ""))]
-        blocks += [("img", f"figures/{figs[name][key].name}", f"{case_labels[name]} {key}")
-                   for key in ("panels", "histograms", "meshes") if key in figs.get(name, {})]
-        blocks.append(("table", *_case_table(df, name, labels)))
+    for case in study.cases:
+        blocks += [("h2", case.title), ("em", paper.get(case.name, {}).get("claim", ""))]
+        blocks += [("img", f"figures/{figs[case.name][key].name}", f"{case.label} {key}")
+                   for key in ("panels", "histograms", "meshes") if key in figs.get(case.name, {})]
+        blocks.append(("table", *_case_table(df, case.name, labels)))
     blocks += _benchmark(out)
-    blocks += [("h2", "How each method was run"),
-               ("ul", METHOD_NOTES + [f"Laplacian steps: {meta['laplacian_steps']}."])]
+    steps = _laplacian_steps(study)
+    blocks += [("h2", "How each method was run"), ("ul", METHOD_NOTES + ([steps] if steps else []))]
+    blocks += _environment_blocks(meta)
+    return _write(out, blocks, "bubblemesh reproduction")
+
+
+def _environment_blocks(meta: dict) -> list:
     v = meta["versions"]
-    blocks += [("h2", "Environment"), ("ul", [
+    return [("h2", "Environment"), ("ul", [
         f"Machine: {meta['platform']}; {meta['cpu']}; {meta['cpu_count']} CPUs",
         "Software: " + ", ".join(f"{k} {val}" for k, val in v.items()),
     ])]  # fmt: skip
-    (out / "README.md").write_text(_markdown(blocks), encoding="utf-8")
-    (out / "index.html").write_text(_html(blocks, "bubblemesh reproduction"), encoding="utf-8")
+
+
+def _write(out: Path, blocks, title: str) -> list[Path]:
+    paths = [out / "README.md", out / "index.html"]
+    paths[0].write_text(_markdown(blocks), encoding="utf-8")
+    paths[1].write_text(_html(blocks, title), encoding="utf-8")
+    return paths
+
+
+# --------------------------------------------------------------------------- any study
+
+SUMMARY_COLS = [("rho_mean", "mean ρ"), ("rho_min", "min ρ"), ("pct_below_0_7", "% < 0.7"),
+                ("elements", "elements"), ("seconds", "seconds")]
+
+
+def x_values(df, x):
+    """The first of the ``x`` parameter columns a row has (NaN when none)."""
+    import pandas as pd
+
+    value = pd.Series(np.nan, index=df.index, dtype=float)
+    for name in x:
+        column = f"param_{name}"
+        if column in df:
+            value = value.fillna(pd.to_numeric(df[column], errors="coerce"))
+    return value
+
+
+def _summary_table(df, study):
+    """Per method and grid point: the mean over the cases of each quality column."""
+    ok = df[df["status"] == "ok"]
+    header = ["method", "parameters", "cases"] + [h for _, h in SUMMARY_COLS]
+    rows = []
+    for (method, params), g in ok.groupby(["method", "params"], sort=False):
+        rows.append([study.labels.get(method, method), _params_text(params), str(len(g))]
+                    + [_fmt(k, float(g[k].mean())) for k, _ in SUMMARY_COLS])
+    return header, rows
+
+
+def _params_text(params: str) -> str:
+    import json
+
+    values = json.loads(params) if params else {}
+    return ", ".join(f"{k} = {v}" for k, v in values.items()) or "defaults"
+
+
+def render_study(study, df, out: Path, meta: dict) -> list[Path]:
+    """README.md / index.html of any study: how it ran, quality against the ``x``
+    parameters (a figure), a summary per method and grid point, verify outcomes, failures."""
+    from . import plots
+
+    out = Path(out)
+    blocks: list = [("h1", study.title)]
+    if study.description:
+        blocks.append(("p", study.description))
+    blocks += [
+        ("p", f"{len(df)} cells: {len(study.cases)} cases × {len(study.methods)} methods and "
+              f"their parameter grids. Quality is the radius ratio ρ = 2r/R (eq. 10 of the "
+              "paper; 1 for an equilateral triangle); % < 0.7 counts the paper's low-quality "
+              "elements."),
+        ("p", f"Regenerate with `{meta['command']}`. Numbers: [results.csv](results.csv) "
+              "(also `results.parquet`), one row per cell."),
+        ("p", _how_it_ran(meta)),
+    ]
+    if study.x:
+        x = x_values(df, study.x)
+        figure = out / "figures" / f"{study.name}_quality.png"
+        figure.parent.mkdir(parents=True, exist_ok=True)
+        axis = " / ".join(study.x)
+        plots.quality_against(figure, df.assign(x=x), study.labels,
+                              {c.name: c.label for c in study.cases}, axis, study.title)
+        blocks += [("h2", f"Quality against {axis}"),
+                   ("img", f"figures/{figure.name}", f"quality against {axis}")]
+    blocks += [("h2", "Mean over the cases, per method and parameters"),
+               ("table", *_summary_table(df, study))]
+    if "verify" in df and df["verify"].notna().any():
+        counts = df.groupby("method", sort=False)["verify"].apply(
+            lambda v: f"{int((v == 'ok').sum())} ok of {int(v.notna().sum())}")
+        blocks += [("h2", "Validity checks"), ("ul", [
+            f"{study.labels.get(m, m)}: {c}" for m, c in counts.items()])]
+        bad = df[df["verify"].notna() & (df["verify"] != "ok")]
+        blocks += [("ul", [f"{r.case}, {study.labels.get(r.method, r.method)} "
+                           f"({_params_text(r.params)}): {r.verify}" for r in bad.itertuples()])]
+    failed = df[df["status"] != "ok"]
+    if len(failed):
+        blocks += [("h2", "Cells that did not run"), ("ul", [
+            f"{r.case}, {study.labels.get(r.method, r.method)} ({_params_text(r.params)}): "
+            f"{r.status}: {r.reason}" for r in failed.itertuples()])]
+    blocks += _environment_blocks(meta)
+    return _write(out, blocks, study.title)
+
+
+def render(study, df, out, run=None, command: str | None = None, meta: dict | None = None):
+    """The report of ``study`` from its results table ``df`` into ``out``."""
+    import json
+
+    out = Path(out)
+    record = out / f"{study.name}.run.json"
+    if meta is None and run is not None and run.computed == 0 and record.exists():
+        meta = json.loads(record.read_text())  # nothing new: the run that made the rows
+    if meta is None:
+        meta = run_meta(study, run, command or f"bubblemesh study {study.name} --out {out}")
+        record.write_text(json.dumps(meta, indent=2, default=str) + "\n")
+    if study.report == "paper":
+        return render_paper(study, df, out, meta)
+    return render_study(study, df, out, meta)

@@ -1,0 +1,396 @@
+"""Studies as a library: cases as data, methods, cells, dask runs, resume, reports, packaging.
+
+The dask tests use real processes: a LocalCluster of 2 worker processes, and a scheduler
+plus two workers started by hand on the loopback interface (killed at the end).  The
+oracles are independent of the study code: radius ratios recomputed from the written
+VTU files with formulas of their own, the bubblemesh library called directly, a
+run inline, and exact checks on what a cell's timing lock allows.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import threading
+import time
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import bubblemesh as bm
+from bubblemesh.studies import (
+    Case,
+    Method,
+    Study,
+    basic_check,
+    load_case,
+    load_cases,
+    load_study,
+    paper_cases,
+    read_results,
+    run_cell,
+    run_study,
+)
+from bubblemesh.studies.results import TIMING_COLUMNS
+
+ROOT = Path(__file__).resolve().parents[1]
+SQUARE = [[0.0, 0.0], [0.5, 0.0], [1.0, 0.0], [1.0, 0.5], [1.0, 1.0], [0.5, 1.0], [0.0, 1.0],
+          [0.0, 0.5]]  # fmt: skip
+HOLE = [[0.4, 0.4], [0.4, 0.6], [0.6, 0.6], [0.6, 0.4]]
+
+
+def _square_loops(n=4):
+    """A unit square with ``n`` segments a side (counter-clockwise)."""
+    s = np.arange(n) / n
+    sides = [np.column_stack([s, 0 * s]), np.column_stack([1 + 0 * s, s]),
+             np.column_stack([1 - s, 1 + 0 * s]), np.column_stack([0 * s, 1 - s])]
+    return [np.vstack(sides)]
+
+
+@pytest.fixture()
+def cases_dir(tmp_path):
+    """Two small cases as the files a user would add: a JSON square with a hole, a .poly."""
+    folder = tmp_path / "cases"
+    folder.mkdir()
+    outer = _square_loops(6)[0].tolist()
+    (folder / "holed.json").write_text(json.dumps(
+        {"name": "holed", "title": "Square with a hole", "loops": [outer, HOLE],
+         "label": "holed"}))  # fmt: skip
+    nodes = "\n".join(f"{i + 1} {x!r} {y!r}" for i, (x, y) in enumerate(SQUARE))
+    segments = "\n".join(f"{i + 1} {i + 1} {(i + 1) % 8 + 1}" for i in range(8))
+    (folder / "plain.poly").write_text(f"8 2 0 0\n{nodes}\n8 0\n{segments}\n0\n")
+    (folder / "notes.txt").write_text("not a case")
+    return folder
+
+
+def _small_study(folder, verify=basic_check):
+    cases = load_cases(folder)
+    methods = [Method("bubblemesh", "bubblemesh.paper", params={"tol": 0.0},
+                      grid={"max_iterations": [3, 30]}, label="bubblemesh §3"),
+               Method("laplacian", "laplacian_uniform", grid={"steps": [1, 8]})]
+    return Study("small", list(cases.values()), methods, keep_meshes=True, verify=verify)
+
+
+def _rho(p, t):
+    """2r/R from the sides: r = K/s, R = abc/(4K)."""
+    a, b, c = (np.linalg.norm(p[t[:, i]] - p[t[:, j]], axis=1) for i, j in ((1, 2), (2, 0),
+                                                                           (0, 1)))
+    u, v = p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]]
+    k = 0.5 * np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])
+    return 2 * (k / (0.5 * (a + b + c))) / (a * b * c / (4 * k))
+
+
+def _untimed(df):
+    return df.drop(columns=list(TIMING_COLUMNS)).reset_index(drop=True)
+
+
+# --------------------------------------------------------------------------- cases as data
+
+
+def test_case_files_round_trip_and_the_folder_loader(cases_dir, tmp_path):
+    cases = load_cases(cases_dir)
+    assert list(cases) == ["holed", "plain"]  # notes.txt is no case
+    np.testing.assert_array_equal(cases["plain"].loops[0], np.array(SQUARE))
+    assert cases["holed"].title == "Square with a hole" and cases["holed"].label == "holed"
+    rng = np.random.default_rng(3)
+    awkward = Case("awkward", (rng.random((7, 2)) * 1e-7 + 0.1,), "t", {"x": [1, 2]})
+    awkward.to_json(tmp_path / "awkward.json")
+    back = load_case(tmp_path / "awkward.json")
+    assert all(np.array_equal(a, b) for a, b in zip(back.loops, awkward.loops))  # bitwise
+    assert back.metadata == {"x": [1, 2]} and back.digest == awkward.digest
+
+
+def test_paper_cases_ship_with_the_package_and_match_their_formulas():
+    cases = paper_cases()
+    assert list(cases) == ["fig3_circle", "fig4_square_hole", "fig5_rect_two_holes",
+                           "fig6_arbitrary_two_holes"]  # fmt: skip
+    (disk,) = cases["fig3_circle"].loops
+    k = np.arange(64)
+    np.testing.assert_allclose(disk, np.column_stack([np.cos(2 * np.pi * k / 64),
+                                                      np.sin(2 * np.pi * k / 64)]), atol=1e-15)
+
+
+def test_bad_case_files_name_the_file(tmp_path):
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"name": "bad", "loops": [[[0, 0], [1, 0]]]}')
+    with pytest.raises(ValueError, match=r"bad\.json.*loop 0 has shape \(2, 2\)"):
+        load_case(bad)
+    bad.write_text("{not json")
+    with pytest.raises(ValueError, match="bad.json"):
+        load_case(bad)
+    with pytest.raises(ValueError, match="does not exist"):
+        load_cases(tmp_path / "nowhere")
+    with pytest.raises(ValueError, match="case name"):
+        Case("no spaces", (np.array(SQUARE),))
+
+
+# --------------------------------------------------------------------------- cells
+
+
+def test_cells_cross_cases_methods_and_grids_with_stable_distinct_keys(cases_dir):
+    study = _small_study(cases_dir)
+    cells = study.cells()
+    assert len(cells) == 2 * (2 + 2)
+    assert len({c.key for c in cells}) == len(cells)
+    assert [c.key for c in _small_study(cases_dir).cells()] == [c.key for c in cells]
+    assert {c.key for c in study.cells(version="9.9")}.isdisjoint(c.key for c in cells)
+    assert [dict(c.params) for c in cells[:2]] == [{"tol": 0.0, "max_iterations": 3},
+                                                    {"tol": 0.0, "max_iterations": 30}]
+
+
+def test_a_cell_is_the_library_run_and_its_numbers_are_the_mesh(cases_dir):
+    study = _small_study(cases_dir)
+    cell = study.cells()[1]  # holed, bubblemesh, max_iterations=30
+    out = run_cell(cell, basic_check, keep_mesh=True)
+    row, (points, triangles, _) = out["row"], out["mesh"]
+    direct = bm.optimize(bm.generate(bm.Domain.from_loops(cell.case.loops)), tol=0.0,
+                         max_iterations=30)
+    np.testing.assert_array_equal(points, direct.points)
+    np.testing.assert_array_equal(triangles, direct.triangles)
+    rho = _rho(points, triangles)
+    assert row["status"] == "ok" and row["verify"] == "ok"
+    assert row["elements"] == len(triangles) and row["n_below_0_7"] == int((rho < 0.7).sum())
+    assert row["rho_min"] == pytest.approx(rho.min(), abs=1e-12)
+    assert row["boundary_shift"] == 0.0 and row["param_max_iterations"] == 30
+
+
+def test_the_checker_and_a_user_function(tmp_path):
+    case = Case("square", tuple(_square_loops(3)))
+    from scipy.spatial import Delaunay
+
+    inner = np.array([[0.3, 0.4], [0.6, 0.5], [0.5, 0.7]])
+    pts = np.vstack([case.boundary, inner])
+    tri = Delaunay(pts).simplices
+    u, v = pts[tri[:, 1]] - pts[tri[:, 0]], pts[tri[:, 2]] - pts[tri[:, 0]]
+    cross = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    tri[cross < 0] = tri[cross < 0][:, ::-1]
+    assert basic_check(case, pts, tri) == "ok"
+    flipped = tri.copy()
+    flipped[0] = flipped[0][::-1]
+    assert basic_check(case, pts, flipped).startswith("failed: 1 triangles are clockwise")
+    assert "area" in basic_check(case, pts, tri[1:]) or "boundary" in basic_check(
+        case, pts, tri[1:])
+    moved = pts.copy()
+    moved[0] += 0.01
+    assert "boundary nodes" in basic_check(case, moved, tri)
+
+    method = Method.from_function("scipy", lambda loops: (pts, tri))
+    cell = Study("s", [case], [method]).cells()[0]
+    row = run_cell(cell)["row"]
+    assert row["status"] == "ok" and row["verify"] == "ok" and row["elements"] == len(tri)
+
+
+def test_a_failing_method_is_a_row_and_timed_cells_never_overlap(tmp_path):
+    case = Case("square", tuple(_square_loops(2)))
+
+    def broken(loops):
+        raise ArithmeticError("no mesh here")
+
+    def slow(loops, n):
+        time.sleep(0.2)
+        raise ArithmeticError("slow")
+
+    cell = Study("s", [case], [Method.from_function("broken", broken)]).cells()[0]
+    row = run_cell(cell)["row"]
+    assert row["status"] == "failed" and row["reason"] == "ArithmeticError: no mesh here"
+    for timed in (True, False):
+        study = Study("s", [case], [Method.from_function("slow", slow, timed=timed,
+                                                         grid={"n": [1, 2]})])
+        rows: list = []
+
+        def run(cell, into=rows):
+            into.append(run_cell(cell)["row"])
+
+        threads = [threading.Thread(target=run, args=(c,)) for c in study.cells()]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(10)
+        first, second = sorted(rows, key=lambda r: r["started"])
+        apart = second["started"] + 1e-3 >= first["started"] + first["cell_seconds"]
+        assert apart == timed  # the lock serialises timed cells, and only those
+
+
+# --------------------------------------------------------------------------- dask
+
+
+def test_study_on_a_local_cluster_rerun_and_inline_agree(cases_dir, tmp_path):
+    pytest.importorskip("distributed")
+    meshio = pytest.importorskip("meshio")
+    study = _small_study(cases_dir)
+    run = run_study(study, tmp_path / "local", progress=False)
+    assert run.computed == 8 and run.reused == 0 and run.workers == 2
+    df = run.table
+    assert list(df["key"]) == [c.key for c in study.cells()]
+    assert (df["status"] == "ok").all() and (df["verify"] == "ok").all(), df[["reason"]]
+    assert df["worker"].str.startswith("tcp://127.0.0.1").all()
+    for r in df.itertuples():  # every number recomputed from the mesh the study wrote
+        m = meshio.read(tmp_path / "local" / r.mesh_file)
+        rho = _rho(m.points[:, :2], m.cells_dict["triangle"])
+        assert r.elements == len(rho) and r.n_below_0_7 == int((rho < 0.7).sum())
+        assert r.rho_mean == pytest.approx(rho.mean(), abs=1e-12)
+    lap = df[df.method == "laplacian"].set_index(["case", "param_steps"])["rho_mean"]
+    assert lap["holed", 1] != lap["holed", 8]
+
+    again = run_study(study, tmp_path / "local", progress=False)
+    assert again.computed == 0 and again.reused == 8 and again.workers == 0
+    pd = pytest.importorskip("pandas")
+    pd.testing.assert_frame_equal(_untimed(again.table), _untimed(df), check_dtype=False)
+    stored = read_results(tmp_path / "local")
+    assert len(stored) == 8 and set(stored["key"]) == set(df["key"])
+
+    inline = run_study(study, tmp_path / "inline", scheduler="inline", progress=False)
+    pd.testing.assert_frame_equal(_untimed(inline.table).drop(columns="mesh_file"),
+                                  _untimed(df).drop(columns="mesh_file"), check_dtype=False)
+
+
+def _start(cmd, env, log):
+    return subprocess.Popen(cmd, env=env, stdout=log, stderr=subprocess.STDOUT,
+                            start_new_session=True)
+
+
+def _wait_for(path: Path, seconds: float) -> None:
+    deadline = time.monotonic() + seconds
+    while not path.exists() and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert path.exists(), f"{path} not written within {seconds} s"
+
+
+@pytest.mark.slow
+def test_the_same_study_on_a_cluster_started_by_hand(cases_dir, tmp_path):
+    pytest.importorskip("distributed")
+    pd = pytest.importorskip("pandas")
+    dask = shutil.which("dask", path=os.path.dirname(sys.executable)) or shutil.which("dask")
+    if dask is None:
+        pytest.skip("no dask command")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get(
+        "PYTHONPATH", "")]))  # fmt: skip
+    file = tmp_path / "scheduler.json"
+    log = open(tmp_path / "cluster.log", "w")
+    procs = [_start([dask, "scheduler", "--host", "127.0.0.1", "--port", "0",
+                     "--no-dashboard", "--dashboard-address", "127.0.0.1:0",
+                     "--scheduler-file", str(file)], env, log)]
+    try:
+        _wait_for(file, 60)
+        address = json.loads(file.read_text())["address"]
+        assert address.startswith("tcp://127.0.0.1:")
+        for _ in range(2):
+            procs.append(_start([dask, "worker", address, "--nthreads", "1", "--nworkers", "1",
+                                 "--host", "127.0.0.1", "--no-dashboard", "--no-nanny",
+                                 "--dashboard-address", "127.0.0.1:0"], env, log))
+        study = _small_study(cases_dir)
+        here = run_study(study, tmp_path / "hand", scheduler=address, progress=False,
+                         timeout=60)
+        assert here.computed == 8 and here.workers >= 1
+        assert "timing lock" in here.timing  # these workers offer no 'timing' resource
+        local = run_study(study, tmp_path / "local", progress=False)
+        pd.testing.assert_frame_equal(_untimed(here.table), _untimed(local.table),
+                                      check_dtype=False)
+        os.environ["BUBBLEMESH_SCHEDULER"] = address  # the same cluster named by the variable
+        try:
+            assert run_study(study, tmp_path / "hand", progress=False).computed == 0
+        finally:
+            del os.environ["BUBBLEMESH_SCHEDULER"]
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in reversed(procs):
+            try:
+                p.wait(15)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait(5)
+        log.close()
+
+
+def test_a_failing_method_on_the_cluster_is_an_error_row(cases_dir, tmp_path):
+    pytest.importorskip("distributed")
+    module = tmp_path / "mine.py"
+    module.write_text("def mesh(loops, **params):\n    raise RuntimeError('cannot mesh this')\n")
+    case = load_cases(cases_dir)["plain"]
+    study = Study("fails", [case], [Method.from_function("mine", f"{module}:mesh"),
+                                    Method("triangle", "triangle")], verify=None)
+    run = run_study(study, tmp_path / "out", progress=False, workers=1)
+    rows = run.table.set_index("method")
+    assert rows.loc["mine", "status"] == "failed"
+    assert rows.loc["mine", "reason"] == "RuntimeError: cannot mesh this"
+    assert rows.loc["triangle", "status"] in ("ok", "skipped")  # the study went on
+    assert run_study(study, tmp_path / "out", progress=False).computed == 0
+    assert run_study(study, tmp_path / "out", progress=False, retry_failed=True,
+                     scheduler="inline").computed >= 1
+
+
+# --------------------------------------------------------------------------- definitions, CLI
+
+
+def test_a_toml_definition_through_the_command_line(cases_dir, tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    from bubblemesh.cli import main
+
+    definition = tmp_path / "sweep.toml"
+    definition.write_text(
+        'name = "sweep"\ntitle = "A sweep"\ncases = ["plain"]\nx = ["max_iterations"]\n'
+        '[[methods]]\nname = "bm"\nadapter = "bubblemesh.paper"\n'
+        'grid = { max_iterations = [2, 20] }\n')
+    out = tmp_path / "out"
+    argv = ["study", str(definition), "--cases-dir", str(cases_dir), "--out", str(out),
+            "--scheduler", "inline"]
+    assert main(argv) == 0
+    assert "2 cells, 2 computed, 0 reused" in capsys.readouterr().out
+    readme = (out / "README.md").read_text()
+    assert f"`bubblemesh study {definition} --cases-dir {cases_dir} --out {out}/`" in readme
+    assert (out / "figures" / "sweep_quality.png").stat().st_size > 0
+    for word in ("issue", "#1", "TODO"):
+        assert word not in readme
+    assert main(argv) == 0 and "0 computed, 2 reused" in capsys.readouterr().out
+    assert main([*argv[:-2], "--scheduler", "nowhere"]) == 2
+    assert main(["study", str(definition), "--case", "nope", "--cases-dir", str(cases_dir),
+                 "--scheduler", "inline"]) == 2
+    assert "unknown case 'nope'" in capsys.readouterr().err
+    definition.write_text('name = "x"\nwho = 1\n')
+    assert main(["study", str(definition), "--scheduler", "inline"]) == 2
+    assert "unknown setting 'who'" in capsys.readouterr().err
+
+
+def test_reproduce_checks_its_arguments_before_meshing(monkeypatch, capsys, tmp_path):
+    from bubblemesh.cli import main
+
+    assert main(["reproduce", "--case", "fig3_circle", "--case", "nope", "--out",
+                 str(tmp_path)]) == 2
+    assert "unknown case 'nope'; known: fig3_circle, fig4_square_hole" in capsys.readouterr().err
+    assert main(["reproduce", "--scheduler", "localhost:1", "--out", str(tmp_path)]) == 2
+    assert "expected tcp://HOST:PORT" in capsys.readouterr().err
+    monkeypatch.setitem(sys.modules, "distributed", None)  # as if not installed
+    assert main(["reproduce", "--out", str(tmp_path)]) == 1
+    assert "pip install 'bubblemesh[studies]'" in capsys.readouterr().err
+    assert not (tmp_path / "results.csv").exists()
+
+
+def test_shipped_definitions_load():
+    paper = load_study("paper")
+    assert [c.name for c in paper.cases][0] == "fig3_circle" and len(paper.methods) == 9
+    assert paper.report == "paper" and len(paper.cells()) == 36
+    sweep = load_study("iterations")
+    assert len(sweep.cells()) >= 200 and sweep.x == ("max_iterations", "steps")
+
+
+@pytest.mark.slow
+def test_the_wheel_has_no_top_level_cases_and_ships_the_case_data(tmp_path):
+    pytest.importorskip("setuptools")
+    result = subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
+         "-w", str(tmp_path), str(ROOT)], capture_output=True, text=True, timeout=300)
+    if result.returncode != 0:
+        pytest.skip(f"cannot build a wheel here: {result.stderr.strip()[-200:]}")
+    (wheel,) = tmp_path.glob("bubblemesh-*.whl")
+    names = zipfile.ZipFile(wheel).namelist()
+    tops = {n.split("/")[0] for n in names if not n.split("/")[0].endswith(".dist-info")}
+    assert tops == {"bubblemesh"}, tops
+    for shipped in ("fig3_circle.json", "fig6_arbitrary_two_holes.json", "paper.toml",
+                    "iterations.toml"):
+        assert f"bubblemesh/studies/data/{shipped}" in names
