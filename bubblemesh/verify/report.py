@@ -94,7 +94,7 @@ class Report:
 
     def to_frame(self):
         """A pandas DataFrame, one row per violation kept."""
-        import pandas as pd  # type: ignore[import-untyped]
+        import pandas as pd
 
         columns = ["kind", "triangle", "edge_u", "edge_v", "node", "segment", "message"]
         frame = pd.DataFrame([v.as_row() for v in self.violations], columns=columns)
