@@ -394,3 +394,16 @@ def test_the_wheel_has_no_top_level_cases_and_ships_the_case_data(tmp_path):
     for shipped in ("fig3_circle.json", "fig6_arbitrary_two_holes.json", "paper.toml",
                     "iterations.toml"):
         assert f"bubblemesh/studies/data/{shipped}" in names
+
+
+def test_the_exact_check_judges_cells_like_the_verifier():
+    """The 'exact' verify column is bubblemesh.verify's verdict: ok for a paper
+    mesh of the case, failed naming the kind for one with a triangle removed."""
+    from bubblemesh.studies.case import paper_cases
+    from bubblemesh.studies.checks import exact_check
+
+    case = paper_cases()["fig4_square_hole"]
+    mesh = bm.optimize(bm.generate(case.domain()))
+    assert exact_check(case, mesh.points, mesh.triangles) == "ok"
+    verdict = exact_check(case, mesh.points, mesh.triangles[1:])
+    assert verdict.startswith("failed:") and "area" in verdict, verdict

@@ -11,7 +11,7 @@ import numpy as np
 
 from .case import Case
 
-__all__ = ["basic_check"]
+__all__ = ["basic_check", "exact_check"]
 
 
 def _problem(case: Case, points: np.ndarray, triangles: np.ndarray) -> str | None:
@@ -57,3 +57,17 @@ def basic_check(case: Case, points: np.ndarray, triangles: np.ndarray) -> str:
     node on them, and the area of the region: ``"ok"`` or ``"failed: ..."``."""
     problem = _problem(case, points, triangles)
     return "ok" if problem is None else f"failed: {problem}"
+
+
+def exact_check(case: Case, points: np.ndarray, triangles: np.ndarray) -> str:
+    """The exact checks of :mod:`bubblemesh.verify` against the case's boundary
+    (validity, conformity with split segments allowed, constrained Delaunay,
+    boundary nodes unmoved): ``"ok"`` or ``"failed: <kinds and counts>"``."""
+    from bubblemesh.verify import check
+
+    domain = case.domain()
+    report = check(points, triangles, domain.segments, domain.points)
+    if report.ok:
+        return "ok"
+    kinds = sorted({v.kind for v in report.violations})
+    return "failed: " + ", ".join(f"{report.count(k)} {k}" for k in kinds)

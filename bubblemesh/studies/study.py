@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from .case import Case, bundled_folder, load_cases
-from .checks import basic_check
+from .checks import basic_check, exact_check
 from .methods import Method, Skipped, resolve_function
 
 __all__ = ["Cell", "Study", "load_study", "run_cell", "bubblemesh_version", "versions"]
@@ -254,11 +254,13 @@ def shipped_studies() -> list[str]:
 def _verify_from(setting: Any, path: Path) -> Verify | None:
     if setting in (None, "basic"):
         return basic_check
+    if setting == "exact":
+        return exact_check
     if setting in ("none", False):
         return None
     if isinstance(setting, str):
         return resolve_function(setting)
-    raise ValueError(f"study definition {path}: verify must be 'basic', 'none' or "
+    raise ValueError(f"study definition {path}: verify must be 'basic', 'exact', 'none' or "
                      "'module:function'")
 
 
