@@ -1,8 +1,9 @@
 """Domain: the validated refined boundary of paper §2.1 and its area A_geo (eq. 6).
 
-Oracles here share nothing with bubblemesh.domain: rational arithmetic
-(fractions.Fraction) for orientation, segment contact and point location, and
-shapely for areas and hole points.
+Oracles here share nothing with bubblemesh.domain or bubblemesh._sweep:
+rational arithmetic (fractions.Fraction) for orientation, segment contact and
+point location, brute force over all pairs of segments and loops, and shapely
+for areas and hole points.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 from strategies import budget, domains
 
+from bubblemesh._sweep import find_crossing
 from bubblemesh.domain import Domain
 from bubblemesh.errors import GeometryError
 
@@ -118,6 +120,44 @@ def loops_meet(ring_a, ring_b) -> bool:
         for i in range(na)
         for j in range(nb)
     )
+
+
+def intersection_kind(a, b, c, d) -> str | None:
+    """How closed segments a-b and c-d intersect, from a + t(b - a) = c + u(d - c) solved
+    in rationals: None, "crosses" (one point inside both), "touches" (one point at an
+    end of either) or "overlaps" (a common piece of positive length)."""
+    a, b, c, d = ((Fraction(x), Fraction(y)) for x, y in (a, b, c, d))
+
+    def cross(p, q):
+        return p[0] * q[1] - p[1] * q[0]
+
+    r, s, w = (b[0] - a[0], b[1] - a[1]), (d[0] - c[0], d[1] - c[1]), (c[0] - a[0], c[1] - a[1])
+    denominator = cross(r, s)
+    if denominator != 0:
+        t, u = cross(w, s) / denominator, cross(w, r) / denominator
+        if not (0 <= t <= 1 and 0 <= u <= 1):
+            return None
+        return "crosses" if 0 < t < 1 and 0 < u < 1 else "touches"
+    if cross(w, r) != 0:
+        return None  # parallel lines
+    rr = r[0] * r[0] + r[1] * r[1]
+    t0 = (w[0] * r[0] + w[1] * r[1]) / rr
+    t1 = t0 + (s[0] * r[0] + s[1] * r[1]) / rr
+    low, high = max(Fraction(0), min(t0, t1)), min(Fraction(1), max(t0, t1))
+    if low > high:
+        return None
+    return "touches" if low == high else "overlaps"
+
+
+def segment_conflict(points, first, second) -> str | None:
+    """The oracle's verdict on two segments given as node-index pairs: sharing an end
+    node (the same index) is allowed, any other common point is a conflict."""
+    a, b = first
+    c, d = second
+    kind = intersection_kind(points[a], points[b], points[c], points[d])
+    if kind == "touches" and {a, b} & {c, d}:
+        return None  # they meet at their shared node only
+    return kind
 
 
 CONFLICT = re.compile(
@@ -328,6 +368,119 @@ def test_outer_and_hole_accepted_iff_valid(outer, hole):
     expected = abs(signed_area(outer)) - abs(signed_area(hole))
     assert domain.area == pytest.approx(float(expected), rel=1e-14)
     assert strictly_inside(tuple(domain.hole_points[0]), hole)
+
+
+# --- the sweep against brute force over all pairs -------------------------------------
+
+
+def brute_force_conflicts(points, segments) -> dict:
+    points = [tuple(map(float, p)) for p in points]
+    found = {}
+    for i in range(len(segments)):
+        for j in range(i + 1, len(segments)):
+            kind = segment_conflict(points, segments[i], segments[j])
+            if kind:
+                found[i, j] = kind
+    return found
+
+
+def assert_find_crossing_agrees(points, segments) -> None:
+    """Yes/no as brute force, and a reported pair is a true conflict of that kind."""
+    conflicts = brute_force_conflicts(points, segments)
+    result = find_crossing(np.array(points, dtype=float), np.array(segments).reshape(-1, 2))
+    if result is None:
+        assert not conflicts
+        return
+    i, j, verb = result
+    assert i < j
+    assert conflicts.get((i, j)) == verb, (result, conflicts)
+
+
+grid_coordinate = st.integers(0, 4).map(float)
+
+
+@st.composite
+def arbitrary_segments(draw):
+    """Segments between points of a 5 x 5 grid; points may repeat (distinct indices
+    at one place), segments may share ends, repeat or run along each other."""
+    points = draw(st.lists(st.tuples(grid_coordinate, grid_coordinate), min_size=2, max_size=9))
+    pairs = [(i, j) for i in range(len(points)) for j in range(len(points))]
+    pairs = [(i, j) for i, j in pairs if points[i] != points[j]]
+    assume(pairs)
+    return points, draw(st.lists(st.sampled_from(pairs), min_size=1, max_size=8))
+
+
+@st.composite
+def mostly_planar_segments(draw):
+    """A subset of the edges of a triangulated grid (they never cross; many share ends
+    and lie along one line) in random directions, plus up to two arbitrary segments
+    (often long): conflict-free sets are common, and one segment can spoil them."""
+    k = draw(st.integers(2, 5))
+    points = [(float(i), float(j)) for i in range(k) for j in range(k)]
+    edges = []
+    for i in range(k):
+        for j in range(k):
+            here = i * k + j
+            if i + 1 < k:
+                edges.append((here, here + k))
+            if j + 1 < k:
+                edges.append((here, here + 1))
+            if i + 1 < k and j + 1 < k:
+                edges.append((here, here + k + 1) if (i + j) % 2 else (here + 1, here + k))
+    chosen = draw(st.lists(st.sampled_from(edges), unique=True, min_size=1, max_size=12))
+    node = st.integers(0, k * k - 1)
+    extra = draw(st.lists(st.tuples(node, node).filter(lambda e: e[0] != e[1]), max_size=2))
+    segments = [e[::-1] if draw(st.booleans()) else e for e in chosen + extra]
+    order = draw(st.permutations(range(len(segments))))
+    return points, [segments[s] for s in order]
+
+
+@budget(300)
+@given(arbitrary_segments())
+def test_find_crossing_agrees_with_brute_force(case):
+    assert_find_crossing_agrees(*case)
+
+
+@budget(300)
+@given(mostly_planar_segments())
+def test_find_crossing_agrees_with_brute_force_on_nearly_planar_sets(case):
+    assert_find_crossing_agrees(*case)
+
+
+def test_find_crossing_examples():
+    square = [(0.0, 0.0), (2.0, 0.0), (2.0, 2.0), (0.0, 2.0)]
+    assert find_crossing(square, [(0, 1), (1, 2), (2, 3), (3, 0)]) is None
+    assert find_crossing(square, [(0, 2), (1, 3)]) == (0, 1, "crosses")
+    assert find_crossing(square, [(0, 1), (1, 0)]) == (0, 1, "overlaps")
+    assert find_crossing(square, [(0, 1), (2, 3)]) is None
+    points = [(0.0, 0.0), (2.0, 0.0), (1.0, 0.0), (1.0, 3.0)]
+    assert find_crossing(points, [(0, 1), (2, 3)]) == (0, 1, "touches")
+    # a free point at an end node's place is no segment's business
+    assert find_crossing(square + [(0.0, 0.0)], [(0, 1), (1, 2)]) is None
+
+
+@pytest.mark.parametrize("swap", [False, True])
+@pytest.mark.parametrize("flip_x", [1.0, -1.0])
+@pytest.mark.parametrize("flip_y", [1.0, -1.0])
+def test_crossing_hidden_behind_a_short_segment_is_found(swap, flip_x, flip_y):
+    """Two long segments that cross only after a short one between them has ended:
+    they are never neighbours at an insertion, only after that removal."""
+    points = [(0, 0), (8, 8), (2, 8), (8, 0), (1, 4), (3, 4)]
+    points = [((y, x) if swap else (x, y)) for x, y in points]
+    points = [(flip_x * x, flip_y * y) for x, y in points]
+    segments = [(4, 5), (0, 1), (2, 3)]
+    assert brute_force_conflicts(points, segments) == {(1, 2): "crosses"}
+    assert find_crossing(points, segments) == (1, 2, "crosses")
+
+
+def test_find_crossing_rejects_bad_segments():
+    square = [(0.0, 0.0), (2.0, 0.0), (2.0, 2.0), (0.0, 2.0)]
+    with pytest.raises(GeometryError, match=r"segment 1 = \(2, 2\) has zero length"):
+        find_crossing(square, [(0, 1), (2, 2)])
+    with pytest.raises(GeometryError, match="index out of range"):
+        find_crossing(square, [(0, 4)])
+    with pytest.raises(GeometryError, match="point 1 = .* outside the exact predicates"):
+        find_crossing([(0.0, 0.0), (1e200, 0.0)], [(0, 1)])
 
 
 # --- orientation, layout and derived quantities ----------------------------------------
