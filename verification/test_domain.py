@@ -180,6 +180,22 @@ def assert_names_meeting_segments(message: str, loops) -> None:
     assert segments_meet(*seg1, *seg2), f"{message}: {seg1} and {seg2} do not meet"
 
 
+def assert_names_a_true_conflict(message: str, loops) -> None:
+    """The message names two segments that the oracle says conflict, with its verb."""
+    match = CONFLICT.search(message)
+    assert match, message
+    k1, s1, verb, k2, s2 = (int(g) if g.isdigit() else g for g in match.groups())
+    rings = [[tuple(p) for p in np.asarray(r, dtype=float).tolist()] for r in loops]
+    points = [p for ring in rings for p in ring]
+    start = np.cumsum([0] + [len(ring) for ring in rings]).tolist()
+
+    def segment(k, s):
+        return start[k] + s, start[k] + (s + 1) % len(rings[k])
+
+    assert (k1, s1) != (k2, s2)
+    assert segment_conflict(points, segment(k1, s1), segment(k2, s2)) == verb, message
+
+
 def raises_geometry(loops) -> str:
     with pytest.raises(GeometryError) as info:
         Domain.from_loops(loops)
@@ -481,6 +497,183 @@ def test_find_crossing_rejects_bad_segments():
         find_crossing(square, [(0, 4)])
     with pytest.raises(GeometryError, match="point 1 = .* outside the exact predicates"):
         find_crossing([(0.0, 0.0), (1e200, 0.0)], [(0, 1)])
+
+
+@st.composite
+def rectangle_layouts(draw):
+    """Axis-parallel rectangles and right triangles on a 25 x 25 grid, each in a random
+    orientation from a random node, most drawn within the box of an earlier one
+    (loop 0 is often the whole grid): nested several deep, apart, touching,
+    crossing, overlapping."""
+    loops, boxes = [], []
+    for _ in range(draw(st.integers(1, 7))):
+        host = draw(st.sampled_from([None, *boxes, *boxes[-1:] * 4]))  # mostly the last one
+        low, high = (0, 24) if host is None else (host[0] + 1, host[1] - 1)
+        low_y, high_y = (0, 24) if host is None else (host[2] + 1, host[3] - 1)
+        if high - low < 1 or high_y - low_y < 1:
+            low, high, low_y, high_y = 0, 24, 0, 24
+        x0, x1 = sorted(draw(st.lists(st.integers(low, high), min_size=2, max_size=2, unique=True)))
+        y0, y1 = sorted(
+            draw(st.lists(st.integers(low_y, high_y), min_size=2, max_size=2, unique=True))
+        )
+        if not boxes and draw(st.booleans()):
+            x0, x1, y0, y1 = 0, 24, 0, 24
+        boxes.append((x0, x1, y0, y1))
+        corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+        cut = draw(st.integers(-6, 3))  # a rectangle, or a triangle without corner `cut`
+        if cut >= 0:
+            del corners[cut]
+        if draw(st.booleans()):
+            corners.reverse()
+        start = draw(st.integers(0, len(corners) - 1))
+        loops.append([(float(x), float(y)) for x, y in corners[start:] + corners[:start]])
+    if len(loops) > 1 and draw(st.booleans()):  # the largest loop first, as a user would
+        biggest = max(range(len(loops)), key=lambda k: abs(signed_area(loops[k])))
+        loops.insert(0, loops.pop(biggest))
+    return loops
+
+
+def holes_inside(loops, k) -> list[int]:
+    """The holes whose inside holds loop k (the loops are known to be disjoint)."""
+    return [j for j in range(1, len(loops)) if j != k and strictly_inside(loops[k][0], loops[j])]
+
+
+def assert_layout_verdict(loops) -> None:
+    """Accepted iff valid by brute force; a rejection names a true fault, the first one."""
+    meet = any(loops_meet(loops[i], loops[j]) for i in range(len(loops)) for j in range(i))
+    outside = [k for k in range(1, len(loops)) if not strictly_inside(loops[k][0], loops[0])]
+    nested = [k for k in range(1, len(loops)) if holes_inside(loops, k)]
+    if not (meet or outside or nested):
+        domain = Domain.from_loops(loops)
+        expected = abs(signed_area(loops[0])) - sum(abs(signed_area(r)) for r in loops[1:])
+        assert domain.area == float(expected)
+        for k, point in enumerate(domain.hole_points.tolist(), start=1):
+            assert strictly_inside(tuple(point), loops[k])
+        return
+    message = raises_geometry(loops)
+    if meet:
+        assert_names_a_true_conflict(message, loops)
+        return
+    first_bad = min(outside + nested)
+    if first_bad in outside:
+        assert message == (
+            f"loop {first_bad} (hole {first_bad}) lies outside the outer loop "
+            "(the first loop must be the outer boundary)"
+        )
+        return
+    match = re.fullmatch(
+        rf"loop {first_bad} \(hole {first_bad}\) lies inside loop (\d+) \(hole \d+\); "
+        "nested holes are not supported",
+        message,
+    )
+    assert match, message
+    around = holes_inside(loops, first_bad)
+    j = int(match.group(1))
+    assert j in around
+    # the hole named is the nearest around it: no other hole sits between them
+    assert not [m for m in around if m != j and strictly_inside(loops[m][0], loops[j])]
+
+
+@budget(300)
+@given(rectangle_layouts())
+def test_nesting_and_contact_of_many_loops_against_brute_force(loops):
+    assert_layout_verdict(loops)
+
+
+@st.composite
+def nested_boxes(draw):
+    """Rectangles nested as a random tree, no two meeting: each child lies in its own
+    quarter of its parent's box.  In random order, holes end up inside holes, outside
+    the first loop, or all valid; the lowest nodes often sit straight above others."""
+    boxes = []
+
+    def grow(x0, y0, size, depth):
+        boxes.append((x0, y0, size))
+        half = size // 2
+        if depth == 3 or half < 3:
+            return
+        for qx, qy in ((x0, y0), (x0 + half, y0), (x0, y0 + half), (x0 + half, y0 + half)):
+            if draw(st.booleans()):
+                margin = draw(st.integers(1, max(1, half // 4)))
+                grow(qx + margin, qy + margin, half - 2 * margin, depth + 1)
+
+    grow(0, 0, 64, 0)
+    order = draw(st.permutations(range(len(boxes))))
+    if draw(st.booleans()):
+        order = [0] + [k for k in order if k != 0]
+    loops = []
+    for k in order:
+        x0, y0, size = boxes[k]
+        corners = [(x0, y0), (x0 + size, y0), (x0 + size, y0 + size), (x0, y0 + size)]
+        if draw(st.booleans()):
+            corners.reverse()
+        start = draw(st.integers(0, 3))
+        loops.append([(float(x), float(y)) for x, y in corners[start:] + corners[:start]])
+    return loops
+
+
+@budget(150)
+@given(nested_boxes())
+def test_nesting_of_disjoint_loops_against_brute_force(loops):
+    assert_layout_verdict(loops)
+
+
+@budget(60)
+@given(
+    st.integers(2, 5),
+    st.integers(0, 24),
+    st.lists(st.integers(0, 10), min_size=4, max_size=4),
+    st.booleans(),
+)
+def test_grid_of_holes_with_one_displaced(side, which, box, reverse):
+    """Many holes: one is replaced by a rectangle anywhere (it may swallow, touch or
+    cross others, or leave the domain)."""
+    outer = [(0.0, 0.0), (2.0 * side, 0.0), (2.0 * side, 2.0 * side), (0.0, 2.0 * side)]
+    holes = [
+        [(2.0 * i + 0.5, 2.0 * j + 0.5), (2.0 * i + 1.5, 2.0 * j + 0.5),
+         (2.0 * i + 1.5, 2.0 * j + 1.5), (2.0 * i + 0.5, 2.0 * j + 1.5)]
+        for i in range(side) for j in range(side)
+    ]  # fmt: skip
+    x0, x1 = sorted(box[:2])
+    y0, y1 = sorted(box[2:])
+    assume(x0 < x1 and y0 < y1)
+    moved = [(x0 + 0.5, y0 + 0.5), (x1 + 0.5, y0 + 0.5), (x1 + 0.5, y1 + 0.5), (x0 + 0.5, y1 + 0.5)]
+    holes[which % len(holes)] = moved[::-1] if reverse else moved
+    assert_layout_verdict([outer, *holes])
+
+
+@budget(60)
+@given(st.integers(2, 20), st.data())
+def test_comb_of_long_teeth_with_one_node_moved(teeth, data):
+    """Long horizontal segments spanning the sweep (the quadratic shape of a naive
+    sweep); one node moved anywhere may make them cross, touch or overlap."""
+    length = 64
+    comb = []
+    for k in range(teeth):
+        comb += [(0, 2 * k), (length, 2 * k), (length, 2 * k + 1), (0, 2 * k + 1)]
+    comb[0], comb[-1] = (-1, 0), (-1, 2 * teeth - 1)
+    node = data.draw(st.integers(0, len(comb) - 1))
+    comb[node] = (
+        data.draw(st.integers(-1, length + 1)),
+        data.draw(st.integers(0, 2 * teeth)),
+    )
+    loop = [(float(x), float(y)) for x, y in comb]
+    if loop_problem(loop):
+        message = raises_geometry([loop])
+        assert message.startswith("loop 0 (outer)")
+        if CONFLICT.search(message):
+            assert_names_a_true_conflict(message, [loop])
+        return
+    assert Domain.from_loops([loop]).area == float(abs(signed_area(loop)))
+
+
+def test_deep_nesting_names_the_directly_enclosing_hole():
+    def square(c, r):
+        return [(c - r, c - r), (c + r, c - r), (c + r, c + r), (c - r, c + r)]
+
+    loops = [square(10.0, 10.0), square(10.0, 8.0), square(10.0, 6.0), square(10.0, 4.0)]
+    message = raises_geometry([loops[0], loops[3], loops[1], loops[2]])
+    assert message == "loop 1 (hole 1) lies inside loop 3 (hole 3); nested holes are not supported"
 
 
 # --- orientation, layout and derived quantities ----------------------------------------
