@@ -19,8 +19,10 @@ decides the nesting of all loops at once.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+import numbers
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from decimal import Decimal
 from pathlib import Path
 
 import numpy as np
@@ -79,11 +81,14 @@ class Domain:
 
         Each loop is an ``(n, 2)`` array of nodes, in either orientation; a last
         node exactly equal to the first (a closed ring, as shapely gives) is
-        dropped.  Raises GeometryError, naming the loop and the node or
-        segment, for fewer than 3 nodes, a non-finite or out-of-range
-        coordinate, repeated consecutive nodes, collinear loops, segments that
-        cross, touch or overlap (within a loop or between loops), a hole outside
-        the outer loop and a hole inside another hole.
+        dropped.  Coordinates may be any real numbers (converted to the nearest
+        float64).  Raises GeometryError, naming the loop and the node or
+        segment, for coordinates that are not real numbers (complex, strings,
+        booleans, masked or ragged entries, ints beyond float64), fewer than 3
+        nodes, a non-finite or out-of-range coordinate, repeated consecutive
+        nodes, collinear loops, segments that cross, touch or overlap (within a
+        loop or between loops), a hole outside the outer loop and a hole inside
+        another hole; TypeError if ``loops`` is not a sequence.
         """
         points, offsets = _checked_rings(_as_loop_list(loops))
         ccw = _check_layout(points, offsets)
@@ -208,21 +213,97 @@ def _as_loop_list(loops) -> list:
         raise GeometryError(
             "from_loops takes a sequence of loops; wrap a single outer loop as [loop]"
         )
+    if isinstance(loops, (str, bytes)) or not isinstance(loops, Iterable):
+        raise TypeError(
+            "from_loops takes a sequence of loops (outer first, then holes), "
+            f"got {type(loops).__name__}"
+        )
     loops = list(loops)
     if not loops:
         raise GeometryError("a domain needs at least one loop (the outer boundary)")
     return loops
 
 
+def _node_of(flat_index: int) -> int:
+    return flat_index // 2
+
+
 def _coordinates(ring, name: str) -> np.ndarray:
-    """One loop as an (n, 2) float64 array."""
+    """One loop as an (n, 2) float64 array, refusing what would convert wrongly.
+
+    Real numbers of any type (ints, floats, fractions, decimals) become the
+    nearest float64; complex numbers, strings, booleans, masked entries,
+    ragged rows and numbers beyond float64 are rejected naming the node.
+    """
+    if isinstance(ring, (str, bytes)):
+        raise GeometryError(f"{name} is a string, not an array of nodes")
+    if np.ma.isMaskedArray(ring) and np.ma.getmaskarray(ring).any():
+        node = int(np.argmax(np.ma.getmaskarray(ring).reshape(len(ring), -1).any(axis=1)))
+        raise GeometryError(f"{name} node {node} is masked")
     try:
-        array = np.array(ring, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise GeometryError(f"{name} is not an array of numbers: {error}") from None
+        array = np.asarray(ring)
+    except ValueError:  # rows of different lengths
+        raise GeometryError(f"{name} {_ragged_row(ring)}") from None
     if array.ndim != 2 or array.shape[1] != 2:
         raise GeometryError(f"{name} must be an (n, 2) array of nodes, got shape {array.shape}")
-    return array
+    kind = array.dtype.kind
+    if kind == "c":
+        imaginary = np.flatnonzero((array.imag != 0).any(axis=1))
+        node = int(imaginary[0]) if imaginary.size else 0
+        raise GeometryError(
+            f"{name} has complex coordinates (node {node} = {tuple(array[node].tolist())}); "
+            "nodes are (x, y) pairs of real numbers"
+        )
+    if kind == "O":
+        _check_objects(array, name)
+    elif kind not in "iuf":
+        raise GeometryError(
+            f"{name} has coordinates of dtype {array.dtype}, not real numbers (node 0 = "
+            f"{tuple(array[0].tolist()) if len(array) else ()})"
+        )
+    try:
+        return array.astype(np.float64)
+    except OverflowError:
+        flat = array.ravel().tolist()
+        bad = next(f for f, value in enumerate(flat) if not _fits_float(value))
+        text = str(flat[bad])
+        text = text if len(text) <= 24 else f"{text[:12]}... ({len(text)} characters)"
+        raise GeometryError(
+            f"{name} node {_node_of(bad)} has a coordinate too large for float64: {text}"
+        ) from None
+
+
+def _fits_float(value) -> bool:
+    try:
+        float(value)
+    except OverflowError:
+        return False
+    return True
+
+
+def _check_objects(array: np.ndarray, name: str) -> None:
+    """An object array must hold real numbers only (a bool is not a coordinate)."""
+    flat = array.ravel().tolist()
+    for value_type in set(map(type, flat)):
+        real = issubclass(value_type, (numbers.Real, Decimal)) and not issubclass(
+            value_type, (bool, np.bool_)
+        )
+        if not real:
+            bad = next(f for f, value in enumerate(flat) if type(value) is value_type)
+            raise GeometryError(
+                f"{name} node {_node_of(bad)} has a coordinate of type "
+                f"{value_type.__name__}, not a real number: {flat[bad]!r}"
+            )
+
+
+def _ragged_row(ring) -> str:
+    """Which row of a ragged loop is not an (x, y) pair."""
+    for node, row in enumerate(ring):
+        size = np.size(row) if np.ndim(row) <= 1 else -1
+        if size != 2:
+            what = f"{size} coordinate{'s' * (size != 1)}" if size >= 0 else "nested sequences"
+            return f"node {node} has {what}; each node is an (x, y) pair"
+    return "is not an (n, 2) array of nodes"
 
 
 def _checked_rings(loop_list: list) -> tuple[np.ndarray, np.ndarray]:
@@ -234,7 +315,7 @@ def _checked_rings(loop_list: list) -> tuple[np.ndarray, np.ndarray]:
     rings = [_coordinates(ring, _loop_name(k)) for k, ring in enumerate(loop_list)]
     lengths = np.array([len(ring) for ring in rings], dtype=np.int64)
     offsets = np.concatenate([[0], np.cumsum(lengths)])
-    raw = rings[0] if len(rings) == 1 else np.concatenate(rings)  # np.array made a copy
+    raw = rings[0] if len(rings) == 1 else np.concatenate(rings)  # astype made a copy
 
     def where(q: int) -> tuple[str, int]:
         k = int(np.searchsorted(offsets, q, side="right") - 1)

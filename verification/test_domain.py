@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import re
 import sys
+from decimal import Decimal
 from fractions import Fraction
 
 import numpy as np
@@ -236,6 +237,83 @@ def test_wrong_shape_and_empty_input():
     assert "must be an (n, 2) array" in raises_geometry([np.zeros((4, 3))])
     assert "at least one loop" in raises_geometry([])
     assert "wrap a single outer loop" in raises_geometry(np.array(SQUARE))
+
+
+TRIANGLE = [(0.0, 0.0), (3.0, 0.0), (0.0, 3.0)]
+
+
+@pytest.mark.parametrize(
+    ("hole", "expected"),
+    [
+        (np.array(SMALL_HOLE) + 1j,
+         "loop 1 (hole 1) has complex coordinates (node 0 = ((1+1j), (1+1j)))"),
+        ([(1.0, 1.0), (1.0, 2.0), (2.0 + 0.5j, 2.0), (2.0, 1.0)],
+         "loop 1 (hole 1) has complex coordinates (node 2 = ((2+0.5j), (2+0j)))"),
+        (np.array(SMALL_HOLE, dtype=complex),  # even a zero imaginary part: say .real
+         "loop 1 (hole 1) has complex coordinates (node 0 = ((1+0j), (1+0j)))"),
+        ([(1, 1), (1, 2), (2, 10**400), (2, 1)],
+         "loop 1 (hole 1) node 2 has a coordinate too large for float64: 100000000000..."),
+        (np.array([(1, 1), (1, 2), (2, None), (2, 1)], dtype=object),
+         "loop 1 (hole 1) node 2 has a coordinate of type NoneType, not a real number: None"),
+        (np.array([(1, 1), (1, 2), (2, "2"), (2, 1)], dtype=object),
+         "loop 1 (hole 1) node 2 has a coordinate of type str, not a real number: '2'"),
+        (np.array([(1, 1), (True, 2), (2, 2)], dtype=object),
+         "loop 1 (hole 1) node 1 has a coordinate of type bool, not a real number: True"),
+        ([("1", "1"), ("1", "2"), ("2", "2")],
+         "loop 1 (hole 1) has coordinates of dtype <U1, not real numbers (node 0 = ('1', '1'))"),
+        ([(b"1", b"1"), (b"1", b"2"), (b"2", b"2")],
+         "loop 1 (hole 1) has coordinates of dtype |S1, not real numbers"),
+        (np.ones((3, 2), dtype=bool), "loop 1 (hole 1) has coordinates of dtype bool"),
+        ("abc", "loop 1 (hole 1) is a string, not an array of nodes"),
+        ([(1.0, 1.0), (1.0, 2.0, 0.0), (2.0, 2.0)],
+         "loop 1 (hole 1) node 1 has 3 coordinates; each node is an (x, y) pair"),
+        ([(1.0, 1.0), (1.0, 2.0), (2.0,)],
+         "loop 1 (hole 1) node 2 has 1 coordinate; each node is an (x, y) pair"),
+        ([(1.0, 1.0), (1.0, 2.0), [(2.0, 2.0)]],
+         "loop 1 (hole 1) node 2 has nested sequences; each node is an (x, y) pair"),
+        (np.ma.masked_array(SMALL_HOLE, mask=[[0, 0], [0, 0], [0, 1], [0, 0]]),
+         "loop 1 (hole 1) node 2 is masked"),
+        ([(1.0, 1.0), (1.0, math.nan), (2.0, 2.0)],
+         "loop 1 (hole 1) has a non-finite coordinate at node 1"),
+        ([(1.0, 1.0), (2.0, 2.0), (1.0, 1.0)],
+         "loop 1 (hole 1) has 2 distinct nodes; a loop needs at least 3"),
+        ([(1.0, 1.0)], "loop 1 (hole 1) has 1 distinct nodes; a loop needs at least 3"),
+        (np.zeros((0, 2)), "loop 1 (hole 1) has 0 distinct nodes; a loop needs at least 3"),
+        ([], "loop 1 (hole 1) must be an (n, 2) array of nodes, got shape (0,)"),
+        (None, "loop 1 (hole 1) must be an (n, 2) array of nodes, got shape ()"),
+    ],
+)  # fmt: skip
+def test_bad_coordinates_name_the_loop_and_node(hole, expected):
+    message = raises_geometry([SQUARE, hole])
+    assert message.startswith(expected), message
+
+
+def test_big_int_in_the_outer_loop_is_a_geometry_error_not_an_overflow():
+    message = raises_geometry([[(0, 0), (10**400, 0), (0, 1)]])
+    assert message == (
+        "loop 0 (outer) node 1 has a coordinate too large for float64: "
+        "100000000000... (401 characters)"
+    )
+
+
+@pytest.mark.parametrize("loops", [None, 3.5, "loops", b"loops"])
+def test_loops_that_are_no_sequence_are_a_type_error(loops):
+    with pytest.raises(TypeError, match="from_loops takes a sequence of loops"):
+        Domain.from_loops(loops)
+
+
+def test_real_numbers_of_any_type_become_the_nearest_float():
+    third, big = Fraction(1, 3), 2**60 + 1  # neither is a float: both round
+    loops = [
+        np.array([(0, 0), (Decimal("3.5"), 0), (0, big)], dtype=object),
+        [(third, third), (1, third), (third, np.float32(1.5))],
+    ]
+    domain = Domain.from_loops(loops)
+    expected = [[0.0, 0.0], [3.5, 0.0], [0.0, float(big)],
+                [float(third), float(third)], [1.0, float(third)], [float(third), 1.5]]  # fmt: skip
+    assert domain.points.tolist() == expected
+    ints = Domain.from_loops([np.array(TRIANGLE, dtype=np.int16), [(1, 1), (1, 0.5), (0.5, 1)]])
+    assert ints.points[:3].tolist() == [list(p) for p in TRIANGLE]
 
 
 def test_repeated_consecutive_node_names_the_zero_length_segment():
