@@ -9,23 +9,27 @@ form a valid polygon with holes, because every later step (the initial
 constrained triangulation, the inside test, eq. 6) silently goes wrong on
 crossing or badly nested loops.
 
-Every geometric decision here is exact: segment crossings and point-in-loop
-tests use :func:`bubblemesh.predicates.orient2d`, and the all-pairs segment
-test is a numba sweep over segments sorted by their smallest x, so 10^4-10^5
-boundary nodes validate in well under a second.
+Every geometric decision here is exact (:func:`bubblemesh.predicates.orient2d`)
+and takes O(n log n) time whatever the shape: one sweep line
+(:mod:`bubblemesh._sweep`) finds any two segments that meet where they should
+not and, for each loop, the segment directly below its lowest node, which
+decides the nesting of all loops at once.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+import numbers
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from decimal import Decimal
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
 from numba import njit
 
+from bubblemesh._sweep import CONFLICT_VERB, NO_CONFLICT, precedes, sweep
 from bubblemesh.errors import GeometryError
 from bubblemesh.predicates import orient2d, out_of_range, out_of_range_message
 
@@ -33,9 +37,6 @@ __all__ = ["Domain"]
 
 # orient2d and incircle are exact only while their products neither overflow nor
 # underflow: bubblemesh.predicates sets the coordinate range and checks it.
-
-_NO_CONFLICT, _CROSSES, _TOUCHES, _OVERLAPS = 0, 1, 2, 3
-_CONFLICT_VERB = {_CROSSES: "crosses", _TOUCHES: "touches", _OVERLAPS: "overlaps"}
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -80,30 +81,23 @@ class Domain:
 
         Each loop is an ``(n, 2)`` array of nodes, in either orientation; a last
         node exactly equal to the first (a closed ring, as shapely gives) is
-        dropped.  Raises GeometryError for fewer than 3 nodes, a non-finite or
-        out-of-range coordinate, repeated consecutive nodes, collinear loops,
-        segments that cross, touch or overlap (within a loop or between
-        loops), a hole outside the outer loop and a hole inside another hole.
+        dropped.  Coordinates may be any real numbers (converted to the nearest
+        float64).  Raises GeometryError, naming the loop and the node or
+        segment, for coordinates that are not real numbers (complex, strings,
+        booleans, masked or ragged entries, ints beyond float64), fewer than 3
+        nodes, a non-finite or out-of-range coordinate, repeated consecutive
+        nodes, collinear loops, segments that cross, touch or overlap (within a
+        loop or between loops), a hole outside the outer loop and a hole inside
+        another hole; TypeError if ``loops`` is not a sequence.
         """
-        rings = [_checked_ring(ring, k) for k, ring in enumerate(_as_loop_list(loops))]
-        points = np.concatenate(rings)
-        offsets = np.cumsum([0] + [len(ring) for ring in rings]).astype(np.int64)
-        for k, ring in enumerate(rings):
-            if _all_collinear(ring):
-                raise GeometryError(f"{_loop_name(k)} has zero area: all its nodes are collinear")
-        _check_no_conflicting_segments(points, offsets)
-        _check_nesting(points, offsets)
+        points, offsets = _checked_rings(_as_loop_list(loops))
+        ccw = _check_layout(points, offsets)
 
-        oriented = []
-        for k, ring in enumerate(rings):
-            index = np.arange(offsets[k], offsets[k + 1], dtype=np.int64)
-            wants_ccw = k == 0
-            if _is_counterclockwise(ring) != wants_ccw:
-                index = np.concatenate([index[:1], index[:0:-1]])
-            oriented.append(index)
-        segments = np.concatenate([np.column_stack([ix, np.roll(ix, -1)]) for ix in oriented])
+        # loop 0 counter-clockwise, holes clockwise; each keeps its first node
+        order, segments = _oriented(offsets, ccw != (np.arange(len(ccw)) == 0))
+        oriented = np.split(order, offsets[1:-1])
 
-        loop_areas = [_polygon_area(ring) for ring in rings]
+        loop_areas = _loop_areas(points, offsets)
         for k, loop_area in enumerate(loop_areas):
             if not loop_area > 0.0:
                 raise GeometryError(f"{_loop_name(k)} has zero area (its extent underflows)")
@@ -111,12 +105,12 @@ class Domain:
         if not area > 0.0:
             raise GeometryError("the holes leave the domain with zero area")
 
-        hole_points = np.array(
-            [_point_inside(ring, k) for k, ring in enumerate(rings) if k > 0], dtype=np.float64
-        ).reshape(-1, 2)
+        hole_points, failed = _hole_points(points, offsets)
+        if failed >= 0:
+            raise GeometryError(f"could not find a point strictly inside {_loop_name(failed)}")
         return cls(
             points=_read_only(points),
-            segments=_read_only(segments.astype(np.int64)),
+            segments=_read_only(segments),
             loops=tuple(_read_only(ix) for ix in oriented),
             hole_points=_read_only(hole_points),
             area=area,
@@ -136,7 +130,8 @@ class Domain:
 
         poly = read_poly(path)
         chains = _chain_segments(poly.segments, poly.vertices, poly.first_index)
-        areas = [_polygon_area(poly.vertices[chain]) for chain in chains]
+        offsets = np.cumsum([0] + [len(chain) for chain in chains])
+        areas = _loop_areas(poly.vertices[np.concatenate(chains)], offsets)
         outer = int(np.argmax(areas))
         chains.insert(0, chains.pop(outer))
         try:
@@ -218,40 +213,158 @@ def _as_loop_list(loops) -> list:
         raise GeometryError(
             "from_loops takes a sequence of loops; wrap a single outer loop as [loop]"
         )
+    if isinstance(loops, (str, bytes)) or not isinstance(loops, Iterable):
+        raise TypeError(
+            "from_loops takes a sequence of loops (outer first, then holes), "
+            f"got {type(loops).__name__}"
+        )
     loops = list(loops)
     if not loops:
         raise GeometryError("a domain needs at least one loop (the outer boundary)")
     return loops
 
 
-def _checked_ring(ring, k: int) -> np.ndarray:
-    """One loop as a contiguous (n, 2) float64 array, closing repeat dropped."""
-    name = _loop_name(k)
+def _node_of(flat_index: int) -> int:
+    return flat_index // 2
+
+
+def _coordinates(ring, name: str) -> np.ndarray:
+    """One loop as an (n, 2) float64 array, refusing what would convert wrongly.
+
+    Real numbers of any type (ints, floats, fractions, decimals) become the
+    nearest float64; complex numbers, strings, booleans, masked entries,
+    ragged rows and numbers beyond float64 are rejected naming the node.
+    """
+    if isinstance(ring, (str, bytes)):
+        raise GeometryError(f"{name} is a string, not an array of nodes")
+    if np.ma.isMaskedArray(ring) and np.ma.getmaskarray(ring).any():
+        node = int(np.argmax(np.ma.getmaskarray(ring).reshape(len(ring), -1).any(axis=1)))
+        raise GeometryError(f"{name} node {node} is masked")
     try:
-        ring = np.array(ring, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise GeometryError(f"{name} is not an array of numbers: {error}") from None
-    if ring.ndim != 2 or ring.shape[1] != 2:
-        raise GeometryError(f"{name} must be an (n, 2) array of nodes, got shape {ring.shape}")
-    finite = np.isfinite(ring).all(axis=1)
-    if not finite.all():
-        raise GeometryError(f"{name} has a non-finite coordinate at node {int(np.argmin(finite))}")
-    outside = out_of_range(ring)
-    if outside.any():
-        node = int(np.argmax(outside))
-        raise GeometryError(f"{name} node {node} = {out_of_range_message(ring[node])}")
-    ring = _open_ring(ring)
-    if len(ring) < 3:
-        raise GeometryError(f"{name} has {len(ring)} distinct nodes; a loop needs at least 3")
-    repeats = (ring == np.roll(ring, -1, axis=0)).all(axis=1)
-    if repeats.any():
-        node = int(np.argmax(repeats))
-        x, y = ring[node]
+        array = np.asarray(ring)
+    except ValueError:  # rows of different lengths
+        raise GeometryError(f"{name} {_ragged_row(ring)}") from None
+    if array.ndim != 2 or array.shape[1] != 2:
+        raise GeometryError(f"{name} must be an (n, 2) array of nodes, got shape {array.shape}")
+    kind = array.dtype.kind
+    if kind == "c":
+        imaginary = np.flatnonzero((array.imag != 0).any(axis=1))
+        node = int(imaginary[0]) if imaginary.size else 0
         raise GeometryError(
-            f"{name} segment {node} has zero length: nodes {node} and "
-            f"{(node + 1) % len(ring)} coincide at ({float(x)!r}, {float(y)!r})"
+            f"{name} has complex coordinates (node {node} = {tuple(array[node].tolist())}); "
+            "nodes are (x, y) pairs of real numbers"
         )
-    return np.ascontiguousarray(ring)
+    if kind == "O":
+        _check_objects(array, name)
+    elif kind not in "iuf":
+        raise GeometryError(
+            f"{name} has coordinates of dtype {array.dtype}, not real numbers (node 0 = "
+            f"{tuple(array[0].tolist()) if len(array) else ()})"
+        )
+    try:
+        return array.astype(np.float64)
+    except OverflowError:
+        flat = array.ravel().tolist()
+        bad = next(f for f, value in enumerate(flat) if not _fits_float(value))
+        text = str(flat[bad])
+        text = text if len(text) <= 24 else f"{text[:12]}... ({len(text)} characters)"
+        raise GeometryError(
+            f"{name} node {_node_of(bad)} has a coordinate too large for float64: {text}"
+        ) from None
+
+
+def _fits_float(value) -> bool:
+    try:
+        float(value)
+    except OverflowError:
+        return False
+    return True
+
+
+def _check_objects(array: np.ndarray, name: str) -> None:
+    """An object array must hold real numbers only (a bool is not a coordinate)."""
+    flat = array.ravel().tolist()
+    for value_type in set(map(type, flat)):
+        real = issubclass(value_type, (numbers.Real, Decimal)) and not issubclass(
+            value_type, (bool, np.bool_)
+        )
+        if not real:
+            bad = next(f for f, value in enumerate(flat) if type(value) is value_type)
+            raise GeometryError(
+                f"{name} node {_node_of(bad)} has a coordinate of type "
+                f"{value_type.__name__}, not a real number: {flat[bad]!r}"
+            )
+
+
+def _ragged_row(ring) -> str:
+    """Which row of a ragged loop is not an (x, y) pair."""
+    for node, row in enumerate(ring):
+        size = np.size(row) if np.ndim(row) <= 1 else -1
+        if size != 2:
+            what = f"{size} coordinate{'s' * (size != 1)}" if size >= 0 else "nested sequences"
+            return f"node {node} has {what}; each node is an (x, y) pair"
+    return "is not an (n, 2) array of nodes"
+
+
+def _checked_rings(loop_list: list) -> tuple[np.ndarray, np.ndarray]:
+    """All loops as one (N, 2) float64 array and loop offsets, closing repeats dropped.
+
+    Errors name the loop and the node as given (a dropped closing repeat shifts
+    no index).
+    """
+    rings = [_coordinates(ring, _loop_name(k)) for k, ring in enumerate(loop_list)]
+    lengths = np.array([len(ring) for ring in rings], dtype=np.int64)
+    offsets = np.concatenate([[0], np.cumsum(lengths)])
+    raw = rings[0] if len(rings) == 1 else np.concatenate(rings)  # astype made a copy
+
+    def where(q: int) -> tuple[str, int]:
+        k = int(np.searchsorted(offsets, q, side="right") - 1)
+        return _loop_name(k), q - int(offsets[k])
+
+    finite = np.isfinite(raw).all(axis=1)
+    if not finite.all():
+        name, node = where(int(np.argmin(finite)))
+        raise GeometryError(f"{name} has a non-finite coordinate at node {node}")
+    outside = out_of_range(raw)
+    if outside.any():
+        q = int(np.argmax(outside))
+        name, node = where(q)
+        raise GeometryError(f"{name} node {node} = {out_of_range_message(raw[q])}")
+    closing = _closing_repeats(raw, offsets)
+    lengths = lengths - closing
+    short = np.flatnonzero(lengths < 3)
+    if short.size:
+        k = int(short[0])
+        raise GeometryError(
+            f"{_loop_name(k)} has {lengths[k]} distinct nodes; a loop needs at least 3"
+        )
+    points = raw
+    if closing.any():
+        keep = np.ones(len(raw), dtype=bool)
+        keep[(offsets[1:] - 1)[closing]] = False
+        points = np.ascontiguousarray(raw[keep])
+    offsets = np.concatenate([[0], np.cumsum(lengths)])
+    following = np.arange(1, len(points) + 1)
+    following[offsets[1:] - 1] = offsets[:-1]
+    repeats = (points == points[following]).all(axis=1)
+    if repeats.any():
+        q = int(np.argmax(repeats))
+        k = int(np.searchsorted(offsets, q, side="right") - 1)
+        x, y = points[q]
+        raise GeometryError(
+            f"{_loop_name(k)} segment {q - offsets[k]} has zero length: nodes {q - offsets[k]} "
+            f"and {(q - offsets[k] + 1) % lengths[k]} coincide at ({float(x)!r}, {float(y)!r})"
+        )
+    return points, offsets
+
+
+def _closing_repeats(raw: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """Which loops end with an exact repeat of their first node (closed rings)."""
+    lengths = np.diff(offsets)
+    closing = np.zeros(len(lengths), dtype=bool)
+    long = np.flatnonzero(lengths >= 2)
+    closing[long] = (raw[offsets[long + 1] - 1] == raw[offsets[long]]).all(axis=1)
+    return closing
 
 
 def _open_ring(ring: np.ndarray) -> np.ndarray:
@@ -279,116 +392,105 @@ def _read_only(array: np.ndarray) -> np.ndarray:
     return array
 
 
-# --- exact kernels ------------------------------------------------------------------
+# --- exact kernels over all loops (flat points, loop k = offsets[k]:offsets[k+1]) -----
 
 
 @njit(cache=True)
-def _all_collinear(ring):
-    """True iff every node of the ring lies on one line (exact)."""
-    ax, ay = ring[0, 0], ring[0, 1]
-    bx, by = ring[1, 0], ring[1, 1]
-    for k in range(2, ring.shape[0]):
-        if orient2d(ax, ay, bx, by, ring[k, 0], ring[k, 1]) != 0.0:
-            return False
-    return True
+def _first_collinear_loop(points, offsets):
+    """The first loop whose nodes all lie on one line (exact), -1 if none."""
+    for k in range(offsets.shape[0] - 1):
+        a, b = offsets[k], offsets[k] + 1
+        collinear = True
+        for c in range(offsets[k] + 2, offsets[k + 1]):
+            if orient2d(points[a, 0], points[a, 1], points[b, 0], points[b, 1],
+                        points[c, 0], points[c, 1]) != 0.0:  # fmt: skip
+                collinear = False
+                break
+        if collinear:
+            return k
+    return -1
+
+
+@njit(cache=True)
+def _lowest_nodes(points, offsets):
+    """Each loop's lexicographically smallest node (smallest x, then y; first if tied)."""
+    n_loops = offsets.shape[0] - 1
+    lowest = np.empty(n_loops, dtype=np.int64)
+    for k in range(n_loops):
+        best = offsets[k]
+        for q in range(offsets[k] + 1, offsets[k + 1]):
+            if precedes(points, q, best):
+                best = q
+        lowest[k] = best
+    return lowest
+
+
+@njit(cache=True)
+def _counterclockwise(points, offsets, lowest):
+    """Exact orientation of each simple loop, decided at its lowest node.
+
+    That node is strictly convex, so the turn of its two neighbours gives the
+    orientation (never zero once fold-backs are excluded).
+    """
+    n_loops = offsets.shape[0] - 1
+    ccw = np.empty(n_loops, dtype=np.bool_)
+    for k in range(n_loops):
+        q = lowest[k]
+        p = q - 1 if q > offsets[k] else offsets[k + 1] - 1
+        r = q + 1 if q + 1 < offsets[k + 1] else offsets[k]
+        ccw[k] = orient2d(points[p, 0], points[p, 1], points[q, 0], points[q, 1],
+                          points[r, 0], points[r, 1]) > 0.0  # fmt: skip
+    return ccw
+
+
+@njit(cache=True)
+def _oriented(offsets, flip):
+    """Node order of each loop, reversed after its first node where ``flip``, and the
+    segments joining consecutive nodes of that order."""
+    order = np.arange(offsets[-1])
+    segments = np.empty((offsets[-1], 2), dtype=np.int64)
+    for k in range(offsets.shape[0] - 1):
+        start, end = offsets[k], offsets[k + 1]
+        if flip[k]:
+            order[start + 1 : end] = order[start + 1 : end][::-1].copy()
+        for q in range(start, end):
+            segments[q, 0] = order[q]
+            segments[q, 1] = order[q + 1] if q + 1 < end else order[start]
+    return order, segments
+
+
+@njit(cache=True)
+def _enclosing_loops(points, offsets, segments, lowest, sweep_order, below, ccw):
+    """For each loop: does loop 0 enclose it, and the nearest hole around it (-1: none).
+
+    Loops taken in sweep order of their lowest nodes, so every enclosing loop
+    comes first.  The segment t directly below a loop's lowest node bounds the
+    face that holds the loop: the inside of t's loop m if that lies above t
+    (m counter-clockwise and t directed rightwards, or neither), else the face
+    around m.
+    """
+    n_loops = lowest.shape[0]
+    parent = np.full(n_loops, -1, dtype=np.int64)
+    in_outer = np.zeros(n_loops, dtype=np.bool_)
+    hole_around = np.full(n_loops, -1, dtype=np.int64)
+    for k in sweep_order:
+        t = below[lowest[k]]
+        if t < 0:
+            continue
+        m = np.searchsorted(offsets, t, side="right") - 1
+        rightwards = precedes(points, segments[t, 0], segments[t, 1])
+        p = m if ccw[m] == rightwards else parent[m]
+        parent[k] = p
+        if p >= 0:
+            in_outer[k] = p == 0 or in_outer[p]
+            hole_around[k] = p if p > 0 else hole_around[p]
+    return in_outer, hole_around
 
 
 @njit(cache=True)
 def _on_closed_box(px, py, ax, ay, bx, by):
     """p within the bounding box of a-b; for p collinear with a-b: p on segment a-b."""
     return min(ax, bx) <= px <= max(ax, bx) and min(ay, by) <= py <= max(ay, by)
-
-
-@njit(cache=True)
-def _disjoint_pair_conflict(ax, ay, bx, by, cx, cy, dx, dy):
-    """How closed segments a-b and c-d (no shared node index) meet: 0 not at all."""
-    o_abc = orient2d(ax, ay, bx, by, cx, cy)
-    o_abd = orient2d(ax, ay, bx, by, dx, dy)
-    if o_abc == 0.0 and o_abd == 0.0:
-        # collinear: compare the projections on the dominant axis
-        if ax != bx:
-            lo, hi = max(min(ax, bx), min(cx, dx)), min(max(ax, bx), max(cx, dx))
-        else:
-            lo, hi = max(min(ay, by), min(cy, dy)), min(max(ay, by), max(cy, dy))
-        if lo < hi:
-            return _OVERLAPS
-        return _TOUCHES if lo == hi else _NO_CONFLICT
-    o_cda = orient2d(cx, cy, dx, dy, ax, ay)
-    o_cdb = orient2d(cx, cy, dx, dy, bx, by)
-    if (
-        o_abc != 0.0
-        and o_abd != 0.0
-        and (o_abc > 0.0) != (o_abd > 0.0)
-        and o_cda != 0.0
-        and o_cdb != 0.0
-        and (o_cda > 0.0) != (o_cdb > 0.0)
-    ):
-        return _CROSSES
-    if (
-        (o_abc == 0.0 and _on_closed_box(cx, cy, ax, ay, bx, by))
-        or (o_abd == 0.0 and _on_closed_box(dx, dy, ax, ay, bx, by))
-        or (o_cda == 0.0 and _on_closed_box(ax, ay, cx, cy, dx, dy))
-        or (o_cdb == 0.0 and _on_closed_box(bx, by, cx, cy, dx, dy))
-    ):
-        return _TOUCHES
-    return _NO_CONFLICT
-
-
-@njit(cache=True)
-def _folds_back(px, py, qx, qy, rx, ry):
-    """Adjacent segments p-q, q-r overlap iff r lies on the ray from q through p."""
-    if orient2d(px, py, qx, qy, rx, ry) != 0.0:
-        return False
-    if px != qx:
-        return (px > qx) == (rx > qx)
-    return (py > qy) == (ry > qy)
-
-
-@njit(cache=True)
-def _pair_conflict(points, segments, i, j):
-    a, b = segments[i, 0], segments[i, 1]
-    c, d = segments[j, 0], segments[j, 1]
-    if b == c or a == d:  # consecutive segments of one loop: the shared node is q
-        p, q, r = (a, b, d) if b == c else (c, d, b)
-        if _folds_back(
-            points[p, 0], points[p, 1], points[q, 0], points[q, 1], points[r, 0], points[r, 1]
-        ):
-            return _OVERLAPS
-        return _NO_CONFLICT
-    return _disjoint_pair_conflict(
-        points[a, 0], points[a, 1], points[b, 0], points[b, 1],
-        points[c, 0], points[c, 1], points[d, 0], points[d, 1],
-    )  # fmt: skip
-
-
-@njit(cache=True)
-def _first_conflict(points, segments):
-    """Sweep along x: the first pair of segments that cross, touch or overlap.
-
-    Segments are sorted by their smallest x; a segment is compared only with
-    those that start before it ends in x and overlap it in y.  Returns
-    ``(i, j, kind)`` with ``i < j``, or ``(-1, -1, 0)``.
-    """
-    n = segments.shape[0]
-    xa = points[segments[:, 0], 0]
-    xb = points[segments[:, 1], 0]
-    ya = points[segments[:, 0], 1]
-    yb = points[segments[:, 1], 1]
-    lo_x, hi_x = np.minimum(xa, xb), np.maximum(xa, xb)
-    lo_y, hi_y = np.minimum(ya, yb), np.maximum(ya, yb)
-    order = np.argsort(lo_x, kind="mergesort")
-    for ii in range(n):
-        i = order[ii]
-        for jj in range(ii + 1, n):
-            j = order[jj]
-            if lo_x[j] > hi_x[i]:
-                break
-            if lo_y[j] > hi_y[i] or hi_y[j] < lo_y[i]:
-                continue
-            kind = _pair_conflict(points, segments, i, j)
-            if kind != _NO_CONFLICT:
-                return min(i, j), max(i, j), kind
-    return -1, -1, _NO_CONFLICT
 
 
 @njit(cache=True)
@@ -411,22 +513,47 @@ def _point_in_ring(px, py, ring):
 
 
 @njit(cache=True)
-def _containment(points, offsets):
-    """inside[i, j]: the first node of loop i lies inside loop j (bounding boxes first)."""
-    n_loops = offsets.shape[0] - 1
-    box = np.empty((n_loops, 4))
-    for k in range(n_loops):
-        ring = points[offsets[k] : offsets[k + 1]]
-        box[k, 0], box[k, 1] = ring[:, 0].min(), ring[:, 1].min()
-        box[k, 2], box[k, 3] = ring[:, 0].max(), ring[:, 1].max()
-    inside = np.zeros((n_loops, n_loops), dtype=np.bool_)
-    for i in range(n_loops):
-        px, py = points[offsets[i], 0], points[offsets[i], 1]
-        for j in range(n_loops):
-            if i == j or not (box[j, 0] <= px <= box[j, 2] and box[j, 1] <= py <= box[j, 3]):
-                continue
-            inside[i, j] = _point_in_ring(px, py, points[offsets[j] : offsets[j + 1]]) == 1
-    return inside
+def _point_inside_ring(ring):
+    """A point strictly inside a simple ring, verified with the exact crossing test.
+
+    Scan lines halfway between consecutive distinct node ordinates, widest gap
+    first; on each, the widest inside interval's midpoint.  Returns
+    ``(found, x, y)``.
+    """
+    n = ring.shape[0]
+    levels = np.unique(ring[:, 1])
+    gaps = levels[1:] - levels[:-1]
+    xs = np.empty(n)
+    for g in np.argsort(-gaps, kind="mergesort"):
+        y = 0.5 * (levels[g] + levels[g + 1])
+        if not levels[g] < y < levels[g + 1]:
+            continue
+        count = 0
+        for e in range(n):
+            ax, ay = ring[e, 0], ring[e, 1]
+            bx, by = ring[(e + 1) % n, 0], ring[(e + 1) % n, 1]
+            if (ay > y) != (by > y):
+                xs[count] = ax + (y - ay) * (bx - ax) / (by - ay)
+                count += 1
+        crossings = np.sort(xs[:count])
+        w = np.argmax(crossings[1::2] - crossings[0::2])
+        x = 0.5 * (crossings[2 * w] + crossings[2 * w + 1])
+        if _point_in_ring(x, y, ring) == 1:
+            return True, x, y
+    return False, 0.0, 0.0
+
+
+@njit(cache=True)
+def _hole_points(points, offsets):
+    """One point strictly inside each hole; the first hole without one, or -1."""
+    n_holes = offsets.shape[0] - 2
+    out = np.empty((n_holes, 2))
+    for h in range(n_holes):
+        found, x, y = _point_inside_ring(points[offsets[h + 1] : offsets[h + 2]])
+        if not found:
+            return out, h + 1
+        out[h, 0], out[h, 1] = x, y
+    return out, -1
 
 
 # --- validation and derived quantities ----------------------------------------------
@@ -437,84 +564,68 @@ def _segment_name(global_index: int, offsets: np.ndarray) -> str:
     return f"{_loop_name(k)} segment {global_index - offsets[k]}"
 
 
-def _check_no_conflicting_segments(points: np.ndarray, offsets: np.ndarray) -> None:
-    """Raise if any two segments share a point other than a common end node."""
+def _check_layout(points: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """Raise unless the loops are disjoint simple polygons, holes inside loop 0 only.
+
+    One exact sweep (:mod:`bubblemesh._sweep`) finds any two segments that
+    share a point other than a common end node; without one, the loops are
+    nested or apart, and the segment below each loop's lowest node tells
+    which loop directly encloses it.  Returns each loop's orientation (True:
+    counter-clockwise).
+    """
+    collinear = _first_collinear_loop(points, offsets)
+    if collinear >= 0:
+        raise GeometryError(f"{_loop_name(collinear)} has zero area: all its nodes are collinear")
     index = np.arange(len(points), dtype=np.int64)
     following = index + 1
     following[offsets[1:] - 1] = offsets[:-1]
     segments = np.column_stack([index, following])
-    i, j, kind = _first_conflict(points, segments)
-    if kind != _NO_CONFLICT:
+    lowest = _lowest_nodes(points, offsets)
+    locate = np.zeros(len(points), dtype=np.bool_)
+    locate[lowest] = True
+    i, j, kind, below = sweep(points, segments, locate)
+    if kind != NO_CONFLICT:
         raise GeometryError(
-            f"{_segment_name(j, offsets)} {_CONFLICT_VERB[kind]} {_segment_name(i, offsets)}"
+            f"{_segment_name(j, offsets)} {CONFLICT_VERB[kind]} {_segment_name(i, offsets)}"
         )
-
-
-def _check_nesting(points: np.ndarray, offsets: np.ndarray) -> None:
-    """Holes must lie inside the outer loop and outside each other.
-
-    Called after the segment check: loops that neither cross nor touch are
-    either nested or disjoint, so one node per loop decides.
-    """
-    inside = _containment(points, offsets)
-    for i in range(1, len(offsets) - 1):
-        if not inside[i, 0]:
+    ccw = _counterclockwise(points, offsets, lowest)
+    sweep_order = np.lexsort((points[lowest, 1], points[lowest, 0]))
+    in_outer, hole_around = _enclosing_loops(
+        points, offsets, segments, lowest, sweep_order, below, ccw
+    )
+    bad = np.flatnonzero(~in_outer[1:] | (hole_around[1:] >= 0))
+    if bad.size:
+        k = int(bad[0]) + 1
+        if not in_outer[k]:
             raise GeometryError(
-                f"{_loop_name(i)} lies outside the outer loop "
+                f"{_loop_name(k)} lies outside the outer loop "
                 "(the first loop must be the outer boundary)"
             )
-        for j in range(1, len(offsets) - 1):
-            if inside[i, j]:
-                raise GeometryError(
-                    f"{_loop_name(i)} lies inside {_loop_name(j)}; nested holes are not supported"
-                )
+        raise GeometryError(
+            f"{_loop_name(k)} lies inside {_loop_name(int(hole_around[k]))}; "
+            "nested holes are not supported"
+        )
+    return ccw
 
 
-def _is_counterclockwise(ring: np.ndarray) -> bool:
-    """Exact orientation of a simple ring, decided at its lowest-leftmost node.
+def _loop_areas(points: np.ndarray, offsets: np.ndarray) -> list[float]:
+    """Unsigned shoelace area of each loop, summed with math.fsum.
 
-    That node is strictly convex, so the turn of its two neighbours gives the
-    orientation (never zero once fold-backs are excluded).
+    Coordinates are taken relative to each loop's first node, so a domain far
+    from the origin loses no digits to large products (the shift is exact for
+    nodes within a factor of two of it).
     """
-    k = int(np.lexsort((ring[:, 1], ring[:, 0]))[0])
-    prev, node, succ = ring[k - 1], ring[k], ring[(k + 1) % len(ring)]
-    return orient2d(prev[0], prev[1], node[0], node[1], succ[0], succ[1]) > 0.0
-
-
-def _polygon_area(ring: np.ndarray) -> float:
-    """Unsigned shoelace area, summed with math.fsum.
-
-    Coordinates are taken relative to the first node, so a domain far from the
-    origin loses no digits to large products (the shift is exact for nodes
-    within a factor of two of it).
-    """
-    x, y = ring[:, 0] - ring[0, 0], ring[:, 1] - ring[0, 1]
-    terms = np.concatenate([x * np.roll(y, -1), -(np.roll(x, -1) * y)])
-    return abs(0.5 * math.fsum(terms.tolist()))
-
-
-def _point_inside(ring: np.ndarray, k: int) -> tuple[float, float]:
-    """A point strictly inside a simple ring, verified with the exact crossing test.
-
-    Scan lines halfway between consecutive distinct node ordinates, widest gap
-    first; on each, the widest inside interval's midpoint.
-    """
-    levels = np.unique(ring[:, 1])
-    gaps = np.diff(levels)
-    start, end = ring, np.roll(ring, -1, axis=0)
-    for g in np.argsort(-gaps, kind="stable"):
-        y = 0.5 * (levels[g] + levels[g + 1])
-        if not levels[g] < y < levels[g + 1]:
-            continue
-        crossing = (start[:, 1] > y) != (end[:, 1] > y)
-        a, b = start[crossing], end[crossing]
-        xs = np.sort(a[:, 0] + (y - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1]))
-        widths = xs[1::2] - xs[0::2]
-        w = int(np.argmax(widths))
-        x = 0.5 * (xs[2 * w] + xs[2 * w + 1])
-        if _point_in_ring(x, y, ring) == 1:
-            return float(x), float(y)
-    raise GeometryError(f"could not find a point strictly inside {_loop_name(k)}")
+    lengths = np.diff(offsets)
+    rel = points - np.repeat(points[offsets[:-1]], lengths, axis=0)
+    following = np.arange(1, len(points) + 1)
+    following[offsets[1:] - 1] = offsets[:-1]
+    x, y = rel[:, 0], rel[:, 1]
+    terms = np.empty(2 * len(points))
+    terms[0::2] = x * y[following]
+    terms[1::2] = -(x[following] * y)
+    flat = terms.tolist()
+    bounds = (2 * offsets).tolist()
+    return [abs(0.5 * math.fsum(flat[a:b])) for a, b in zip(bounds[:-1], bounds[1:])]
 
 
 # --- .poly loops ----------------------------------------------------------------------

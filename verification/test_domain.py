@@ -1,8 +1,9 @@
 """Domain: the validated refined boundary of paper §2.1 and its area A_geo (eq. 6).
 
-Oracles here share nothing with bubblemesh.domain: rational arithmetic
-(fractions.Fraction) for orientation, segment contact and point location, and
-shapely for areas and hole points.
+Oracles here share nothing with bubblemesh.domain or bubblemesh._sweep:
+rational arithmetic (fractions.Fraction) for orientation, segment contact and
+point location, brute force over all pairs of segments and loops, and shapely
+for areas and hole points.
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ from __future__ import annotations
 import math
 import re
 import sys
+from decimal import Decimal
 from fractions import Fraction
 
 import numpy as np
@@ -18,6 +20,7 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 from strategies import budget, domains
 
+from bubblemesh._sweep import find_crossing
 from bubblemesh.domain import Domain
 from bubblemesh.errors import GeometryError
 
@@ -120,6 +123,44 @@ def loops_meet(ring_a, ring_b) -> bool:
     )
 
 
+def intersection_kind(a, b, c, d) -> str | None:
+    """How closed segments a-b and c-d intersect, from a + t(b - a) = c + u(d - c) solved
+    in rationals: None, "crosses" (one point inside both), "touches" (one point at an
+    end of either) or "overlaps" (a common piece of positive length)."""
+    a, b, c, d = ((Fraction(x), Fraction(y)) for x, y in (a, b, c, d))
+
+    def cross(p, q):
+        return p[0] * q[1] - p[1] * q[0]
+
+    r, s, w = (b[0] - a[0], b[1] - a[1]), (d[0] - c[0], d[1] - c[1]), (c[0] - a[0], c[1] - a[1])
+    denominator = cross(r, s)
+    if denominator != 0:
+        t, u = cross(w, s) / denominator, cross(w, r) / denominator
+        if not (0 <= t <= 1 and 0 <= u <= 1):
+            return None
+        return "crosses" if 0 < t < 1 and 0 < u < 1 else "touches"
+    if cross(w, r) != 0:
+        return None  # parallel lines
+    rr = r[0] * r[0] + r[1] * r[1]
+    t0 = (w[0] * r[0] + w[1] * r[1]) / rr
+    t1 = t0 + (s[0] * r[0] + s[1] * r[1]) / rr
+    low, high = max(Fraction(0), min(t0, t1)), min(Fraction(1), max(t0, t1))
+    if low > high:
+        return None
+    return "touches" if low == high else "overlaps"
+
+
+def segment_conflict(points, first, second) -> str | None:
+    """The oracle's verdict on two segments given as node-index pairs: sharing an end
+    node (the same index) is allowed, any other common point is a conflict."""
+    a, b = first
+    c, d = second
+    kind = intersection_kind(points[a], points[b], points[c], points[d])
+    if kind == "touches" and {a, b} & {c, d}:
+        return None  # they meet at their shared node only
+    return kind
+
+
 CONFLICT = re.compile(
     r"loop (\d+) \((?:outer|hole \d+)\) segment (\d+) (crosses|touches|overlaps) "
     r"loop (\d+) \((?:outer|hole \d+)\) segment (\d+)"
@@ -138,6 +179,22 @@ def assert_names_meeting_segments(message: str, loops) -> None:
     seg2 = (r2[s2], r2[(s2 + 1) % len(r2)])
     assert (k1, s1) != (k2, s2)
     assert segments_meet(*seg1, *seg2), f"{message}: {seg1} and {seg2} do not meet"
+
+
+def assert_names_a_true_conflict(message: str, loops) -> None:
+    """The message names two segments that the oracle says conflict, with its verb."""
+    match = CONFLICT.search(message)
+    assert match, message
+    k1, s1, verb, k2, s2 = (int(g) if g.isdigit() else g for g in match.groups())
+    rings = [[tuple(p) for p in np.asarray(r, dtype=float).tolist()] for r in loops]
+    points = [p for ring in rings for p in ring]
+    start = np.cumsum([0] + [len(ring) for ring in rings]).tolist()
+
+    def segment(k, s):
+        return start[k] + s, start[k] + (s + 1) % len(rings[k])
+
+    assert (k1, s1) != (k2, s2)
+    assert segment_conflict(points, segment(k1, s1), segment(k2, s2)) == verb, message
 
 
 def raises_geometry(loops) -> str:
@@ -180,6 +237,83 @@ def test_wrong_shape_and_empty_input():
     assert "must be an (n, 2) array" in raises_geometry([np.zeros((4, 3))])
     assert "at least one loop" in raises_geometry([])
     assert "wrap a single outer loop" in raises_geometry(np.array(SQUARE))
+
+
+TRIANGLE = [(0.0, 0.0), (3.0, 0.0), (0.0, 3.0)]
+
+
+@pytest.mark.parametrize(
+    ("hole", "expected"),
+    [
+        (np.array(SMALL_HOLE) + 1j,
+         "loop 1 (hole 1) has complex coordinates (node 0 = ((1+1j), (1+1j)))"),
+        ([(1.0, 1.0), (1.0, 2.0), (2.0 + 0.5j, 2.0), (2.0, 1.0)],
+         "loop 1 (hole 1) has complex coordinates (node 2 = ((2+0.5j), (2+0j)))"),
+        (np.array(SMALL_HOLE, dtype=complex),  # even a zero imaginary part: say .real
+         "loop 1 (hole 1) has complex coordinates (node 0 = ((1+0j), (1+0j)))"),
+        ([(1, 1), (1, 2), (2, 10**400), (2, 1)],
+         "loop 1 (hole 1) node 2 has a coordinate too large for float64: 100000000000..."),
+        (np.array([(1, 1), (1, 2), (2, None), (2, 1)], dtype=object),
+         "loop 1 (hole 1) node 2 has a coordinate of type NoneType, not a real number: None"),
+        (np.array([(1, 1), (1, 2), (2, "2"), (2, 1)], dtype=object),
+         "loop 1 (hole 1) node 2 has a coordinate of type str, not a real number: '2'"),
+        (np.array([(1, 1), (True, 2), (2, 2)], dtype=object),
+         "loop 1 (hole 1) node 1 has a coordinate of type bool, not a real number: True"),
+        ([("1", "1"), ("1", "2"), ("2", "2")],
+         "loop 1 (hole 1) has coordinates of dtype <U1, not real numbers (node 0 = ('1', '1'))"),
+        ([(b"1", b"1"), (b"1", b"2"), (b"2", b"2")],
+         "loop 1 (hole 1) has coordinates of dtype |S1, not real numbers"),
+        (np.ones((3, 2), dtype=bool), "loop 1 (hole 1) has coordinates of dtype bool"),
+        ("abc", "loop 1 (hole 1) is a string, not an array of nodes"),
+        ([(1.0, 1.0), (1.0, 2.0, 0.0), (2.0, 2.0)],
+         "loop 1 (hole 1) node 1 has 3 coordinates; each node is an (x, y) pair"),
+        ([(1.0, 1.0), (1.0, 2.0), (2.0,)],
+         "loop 1 (hole 1) node 2 has 1 coordinate; each node is an (x, y) pair"),
+        ([(1.0, 1.0), (1.0, 2.0), [(2.0, 2.0)]],
+         "loop 1 (hole 1) node 2 has nested sequences; each node is an (x, y) pair"),
+        (np.ma.masked_array(SMALL_HOLE, mask=[[0, 0], [0, 0], [0, 1], [0, 0]]),
+         "loop 1 (hole 1) node 2 is masked"),
+        ([(1.0, 1.0), (1.0, math.nan), (2.0, 2.0)],
+         "loop 1 (hole 1) has a non-finite coordinate at node 1"),
+        ([(1.0, 1.0), (2.0, 2.0), (1.0, 1.0)],
+         "loop 1 (hole 1) has 2 distinct nodes; a loop needs at least 3"),
+        ([(1.0, 1.0)], "loop 1 (hole 1) has 1 distinct nodes; a loop needs at least 3"),
+        (np.zeros((0, 2)), "loop 1 (hole 1) has 0 distinct nodes; a loop needs at least 3"),
+        ([], "loop 1 (hole 1) must be an (n, 2) array of nodes, got shape (0,)"),
+        (None, "loop 1 (hole 1) must be an (n, 2) array of nodes, got shape ()"),
+    ],
+)  # fmt: skip
+def test_bad_coordinates_name_the_loop_and_node(hole, expected):
+    message = raises_geometry([SQUARE, hole])
+    assert message.startswith(expected), message
+
+
+def test_big_int_in_the_outer_loop_is_a_geometry_error_not_an_overflow():
+    message = raises_geometry([[(0, 0), (10**400, 0), (0, 1)]])
+    assert message == (
+        "loop 0 (outer) node 1 has a coordinate too large for float64: "
+        "100000000000... (401 characters)"
+    )
+
+
+@pytest.mark.parametrize("loops", [None, 3.5, "loops", b"loops"])
+def test_loops_that_are_no_sequence_are_a_type_error(loops):
+    with pytest.raises(TypeError, match="from_loops takes a sequence of loops"):
+        Domain.from_loops(loops)
+
+
+def test_real_numbers_of_any_type_become_the_nearest_float():
+    third, big = Fraction(1, 3), 2**60 + 1  # neither is a float: both round
+    loops = [
+        np.array([(0, 0), (Decimal("3.5"), 0), (0, big)], dtype=object),
+        [(third, third), (1, third), (third, np.float32(1.5))],
+    ]
+    domain = Domain.from_loops(loops)
+    expected = [[0.0, 0.0], [3.5, 0.0], [0.0, float(big)],
+                [float(third), float(third)], [1.0, float(third)], [float(third), 1.5]]  # fmt: skip
+    assert domain.points.tolist() == expected
+    ints = Domain.from_loops([np.array(TRIANGLE, dtype=np.int16), [(1, 1), (1, 0.5), (0.5, 1)]])
+    assert ints.points[:3].tolist() == [list(p) for p in TRIANGLE]
 
 
 def test_repeated_consecutive_node_names_the_zero_length_segment():
@@ -328,6 +462,296 @@ def test_outer_and_hole_accepted_iff_valid(outer, hole):
     expected = abs(signed_area(outer)) - abs(signed_area(hole))
     assert domain.area == pytest.approx(float(expected), rel=1e-14)
     assert strictly_inside(tuple(domain.hole_points[0]), hole)
+
+
+# --- the sweep against brute force over all pairs -------------------------------------
+
+
+def brute_force_conflicts(points, segments) -> dict:
+    points = [tuple(map(float, p)) for p in points]
+    found = {}
+    for i in range(len(segments)):
+        for j in range(i + 1, len(segments)):
+            kind = segment_conflict(points, segments[i], segments[j])
+            if kind:
+                found[i, j] = kind
+    return found
+
+
+def assert_find_crossing_agrees(points, segments) -> None:
+    """Yes/no as brute force, and a reported pair is a true conflict of that kind."""
+    conflicts = brute_force_conflicts(points, segments)
+    result = find_crossing(np.array(points, dtype=float), np.array(segments).reshape(-1, 2))
+    if result is None:
+        assert not conflicts
+        return
+    i, j, verb = result
+    assert i < j
+    assert conflicts.get((i, j)) == verb, (result, conflicts)
+
+
+grid_coordinate = st.integers(0, 4).map(float)
+
+
+@st.composite
+def arbitrary_segments(draw):
+    """Segments between points of a 5 x 5 grid; points may repeat (distinct indices
+    at one place), segments may share ends, repeat or run along each other."""
+    points = draw(st.lists(st.tuples(grid_coordinate, grid_coordinate), min_size=2, max_size=9))
+    pairs = [(i, j) for i in range(len(points)) for j in range(len(points))]
+    pairs = [(i, j) for i, j in pairs if points[i] != points[j]]
+    assume(pairs)
+    return points, draw(st.lists(st.sampled_from(pairs), min_size=1, max_size=8))
+
+
+@st.composite
+def mostly_planar_segments(draw):
+    """A subset of the edges of a triangulated grid (they never cross; many share ends
+    and lie along one line) in random directions, plus up to two arbitrary segments
+    (often long): conflict-free sets are common, and one segment can spoil them."""
+    k = draw(st.integers(2, 5))
+    points = [(float(i), float(j)) for i in range(k) for j in range(k)]
+    edges = []
+    for i in range(k):
+        for j in range(k):
+            here = i * k + j
+            if i + 1 < k:
+                edges.append((here, here + k))
+            if j + 1 < k:
+                edges.append((here, here + 1))
+            if i + 1 < k and j + 1 < k:
+                edges.append((here, here + k + 1) if (i + j) % 2 else (here + 1, here + k))
+    chosen = draw(st.lists(st.sampled_from(edges), unique=True, min_size=1, max_size=12))
+    node = st.integers(0, k * k - 1)
+    extra = draw(st.lists(st.tuples(node, node).filter(lambda e: e[0] != e[1]), max_size=2))
+    segments = [e[::-1] if draw(st.booleans()) else e for e in chosen + extra]
+    order = draw(st.permutations(range(len(segments))))
+    return points, [segments[s] for s in order]
+
+
+@budget(300)
+@given(arbitrary_segments())
+def test_find_crossing_agrees_with_brute_force(case):
+    assert_find_crossing_agrees(*case)
+
+
+@budget(300)
+@given(mostly_planar_segments())
+def test_find_crossing_agrees_with_brute_force_on_nearly_planar_sets(case):
+    assert_find_crossing_agrees(*case)
+
+
+def test_find_crossing_examples():
+    square = [(0.0, 0.0), (2.0, 0.0), (2.0, 2.0), (0.0, 2.0)]
+    assert find_crossing(square, [(0, 1), (1, 2), (2, 3), (3, 0)]) is None
+    assert find_crossing(square, [(0, 2), (1, 3)]) == (0, 1, "crosses")
+    assert find_crossing(square, [(0, 1), (1, 0)]) == (0, 1, "overlaps")
+    assert find_crossing(square, [(0, 1), (2, 3)]) is None
+    points = [(0.0, 0.0), (2.0, 0.0), (1.0, 0.0), (1.0, 3.0)]
+    assert find_crossing(points, [(0, 1), (2, 3)]) == (0, 1, "touches")
+    # a free point at an end node's place is no segment's business
+    assert find_crossing(square + [(0.0, 0.0)], [(0, 1), (1, 2)]) is None
+
+
+@pytest.mark.parametrize("swap", [False, True])
+@pytest.mark.parametrize("flip_x", [1.0, -1.0])
+@pytest.mark.parametrize("flip_y", [1.0, -1.0])
+def test_crossing_hidden_behind_a_short_segment_is_found(swap, flip_x, flip_y):
+    """Two long segments that cross only after a short one between them has ended:
+    they are never neighbours at an insertion, only after that removal."""
+    points = [(0, 0), (8, 8), (2, 8), (8, 0), (1, 4), (3, 4)]
+    points = [((y, x) if swap else (x, y)) for x, y in points]
+    points = [(flip_x * x, flip_y * y) for x, y in points]
+    segments = [(4, 5), (0, 1), (2, 3)]
+    assert brute_force_conflicts(points, segments) == {(1, 2): "crosses"}
+    assert find_crossing(points, segments) == (1, 2, "crosses")
+
+
+def test_find_crossing_rejects_bad_segments():
+    square = [(0.0, 0.0), (2.0, 0.0), (2.0, 2.0), (0.0, 2.0)]
+    with pytest.raises(GeometryError, match=r"segment 1 = \(2, 2\) has zero length"):
+        find_crossing(square, [(0, 1), (2, 2)])
+    with pytest.raises(GeometryError, match="index out of range"):
+        find_crossing(square, [(0, 4)])
+    with pytest.raises(GeometryError, match="point 1 = .* outside the exact predicates"):
+        find_crossing([(0.0, 0.0), (1e200, 0.0)], [(0, 1)])
+
+
+@st.composite
+def rectangle_layouts(draw):
+    """Axis-parallel rectangles and right triangles on a 25 x 25 grid, each in a random
+    orientation from a random node, most drawn within the box of an earlier one
+    (loop 0 is often the whole grid): nested several deep, apart, touching,
+    crossing, overlapping."""
+    loops, boxes = [], []
+    for _ in range(draw(st.integers(1, 7))):
+        host = draw(st.sampled_from([None, *boxes, *boxes[-1:] * 4]))  # mostly the last one
+        low, high = (0, 24) if host is None else (host[0] + 1, host[1] - 1)
+        low_y, high_y = (0, 24) if host is None else (host[2] + 1, host[3] - 1)
+        if high - low < 1 or high_y - low_y < 1:
+            low, high, low_y, high_y = 0, 24, 0, 24
+        x0, x1 = sorted(draw(st.lists(st.integers(low, high), min_size=2, max_size=2, unique=True)))
+        y0, y1 = sorted(
+            draw(st.lists(st.integers(low_y, high_y), min_size=2, max_size=2, unique=True))
+        )
+        if not boxes and draw(st.booleans()):
+            x0, x1, y0, y1 = 0, 24, 0, 24
+        boxes.append((x0, x1, y0, y1))
+        corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+        cut = draw(st.integers(-6, 3))  # a rectangle, or a triangle without corner `cut`
+        if cut >= 0:
+            del corners[cut]
+        if draw(st.booleans()):
+            corners.reverse()
+        start = draw(st.integers(0, len(corners) - 1))
+        loops.append([(float(x), float(y)) for x, y in corners[start:] + corners[:start]])
+    if len(loops) > 1 and draw(st.booleans()):  # the largest loop first, as a user would
+        biggest = max(range(len(loops)), key=lambda k: abs(signed_area(loops[k])))
+        loops.insert(0, loops.pop(biggest))
+    return loops
+
+
+def holes_inside(loops, k) -> list[int]:
+    """The holes whose inside holds loop k (the loops are known to be disjoint)."""
+    return [j for j in range(1, len(loops)) if j != k and strictly_inside(loops[k][0], loops[j])]
+
+
+def assert_layout_verdict(loops) -> None:
+    """Accepted iff valid by brute force; a rejection names a true fault, the first one."""
+    meet = any(loops_meet(loops[i], loops[j]) for i in range(len(loops)) for j in range(i))
+    outside = [k for k in range(1, len(loops)) if not strictly_inside(loops[k][0], loops[0])]
+    nested = [k for k in range(1, len(loops)) if holes_inside(loops, k)]
+    if not (meet or outside or nested):
+        domain = Domain.from_loops(loops)
+        expected = abs(signed_area(loops[0])) - sum(abs(signed_area(r)) for r in loops[1:])
+        assert domain.area == float(expected)
+        for k, point in enumerate(domain.hole_points.tolist(), start=1):
+            assert strictly_inside(tuple(point), loops[k])
+        return
+    message = raises_geometry(loops)
+    if meet:
+        assert_names_a_true_conflict(message, loops)
+        return
+    first_bad = min(outside + nested)
+    if first_bad in outside:
+        assert message == (
+            f"loop {first_bad} (hole {first_bad}) lies outside the outer loop "
+            "(the first loop must be the outer boundary)"
+        )
+        return
+    match = re.fullmatch(
+        rf"loop {first_bad} \(hole {first_bad}\) lies inside loop (\d+) \(hole \d+\); "
+        "nested holes are not supported",
+        message,
+    )
+    assert match, message
+    around = holes_inside(loops, first_bad)
+    j = int(match.group(1))
+    assert j in around
+    # the hole named is the nearest around it: no other hole sits between them
+    assert not [m for m in around if m != j and strictly_inside(loops[m][0], loops[j])]
+
+
+@budget(300)
+@given(rectangle_layouts())
+def test_nesting_and_contact_of_many_loops_against_brute_force(loops):
+    assert_layout_verdict(loops)
+
+
+@st.composite
+def nested_boxes(draw):
+    """Rectangles nested as a random tree, no two meeting: each child lies in its own
+    quarter of its parent's box.  In random order, holes end up inside holes, outside
+    the first loop, or all valid; the lowest nodes often sit straight above others."""
+    boxes = []
+
+    def grow(x0, y0, size, depth):
+        boxes.append((x0, y0, size))
+        half = size // 2
+        if depth == 3 or half < 3:
+            return
+        for qx, qy in ((x0, y0), (x0 + half, y0), (x0, y0 + half), (x0 + half, y0 + half)):
+            if draw(st.booleans()):
+                margin = draw(st.integers(1, max(1, half // 4)))
+                grow(qx + margin, qy + margin, half - 2 * margin, depth + 1)
+
+    grow(0, 0, 64, 0)
+    order = draw(st.permutations(range(len(boxes))))
+    if draw(st.booleans()):
+        order = [0] + [k for k in order if k != 0]
+    loops = []
+    for k in order:
+        x0, y0, size = boxes[k]
+        corners = [(x0, y0), (x0 + size, y0), (x0 + size, y0 + size), (x0, y0 + size)]
+        if draw(st.booleans()):
+            corners.reverse()
+        start = draw(st.integers(0, 3))
+        loops.append([(float(x), float(y)) for x, y in corners[start:] + corners[:start]])
+    return loops
+
+
+@budget(150)
+@given(nested_boxes())
+def test_nesting_of_disjoint_loops_against_brute_force(loops):
+    assert_layout_verdict(loops)
+
+
+@budget(60)
+@given(
+    st.integers(2, 5),
+    st.integers(0, 24),
+    st.lists(st.integers(0, 10), min_size=4, max_size=4),
+    st.booleans(),
+)
+def test_grid_of_holes_with_one_displaced(side, which, box, reverse):
+    """Many holes: one is replaced by a rectangle anywhere (it may swallow, touch or
+    cross others, or leave the domain)."""
+    outer = [(0.0, 0.0), (2.0 * side, 0.0), (2.0 * side, 2.0 * side), (0.0, 2.0 * side)]
+    holes = [
+        [(2.0 * i + 0.5, 2.0 * j + 0.5), (2.0 * i + 1.5, 2.0 * j + 0.5),
+         (2.0 * i + 1.5, 2.0 * j + 1.5), (2.0 * i + 0.5, 2.0 * j + 1.5)]
+        for i in range(side) for j in range(side)
+    ]  # fmt: skip
+    x0, x1 = sorted(box[:2])
+    y0, y1 = sorted(box[2:])
+    assume(x0 < x1 and y0 < y1)
+    moved = [(x0 + 0.5, y0 + 0.5), (x1 + 0.5, y0 + 0.5), (x1 + 0.5, y1 + 0.5), (x0 + 0.5, y1 + 0.5)]
+    holes[which % len(holes)] = moved[::-1] if reverse else moved
+    assert_layout_verdict([outer, *holes])
+
+
+@budget(60)
+@given(st.integers(2, 20), st.data())
+def test_comb_of_long_teeth_with_one_node_moved(teeth, data):
+    """Long horizontal segments spanning the sweep (the quadratic shape of a naive
+    sweep); one node moved anywhere may make them cross, touch or overlap."""
+    length = 64
+    comb = []
+    for k in range(teeth):
+        comb += [(0, 2 * k), (length, 2 * k), (length, 2 * k + 1), (0, 2 * k + 1)]
+    comb[0], comb[-1] = (-1, 0), (-1, 2 * teeth - 1)
+    node = data.draw(st.integers(0, len(comb) - 1))
+    comb[node] = (
+        data.draw(st.integers(-1, length + 1)),
+        data.draw(st.integers(0, 2 * teeth)),
+    )
+    loop = [(float(x), float(y)) for x, y in comb]
+    if loop_problem(loop):
+        message = raises_geometry([loop])
+        assert message.startswith("loop 0 (outer)")
+        if CONFLICT.search(message):
+            assert_names_a_true_conflict(message, [loop])
+        return
+    assert Domain.from_loops([loop]).area == float(abs(signed_area(loop)))
+
+
+def test_deep_nesting_names_the_directly_enclosing_hole():
+    def square(c, r):
+        return [(c - r, c - r), (c + r, c - r), (c + r, c + r), (c - r, c + r)]
+
+    loops = [square(10.0, 10.0), square(10.0, 8.0), square(10.0, 6.0), square(10.0, 4.0)]
+    message = raises_geometry([loops[0], loops[3], loops[1], loops[2]])
+    assert message == "loop 1 (hole 1) lies inside loop 3 (hole 3); nested holes are not supported"
 
 
 # --- orientation, layout and derived quantities ----------------------------------------
