@@ -106,8 +106,8 @@ def _deviation(count, ideal, v, delta):
 def improve_flips(X, tri, nbr, keys, ideal, max_passes, relax):
     """Flip edges by the module docstring's rules until none flips (at most
     ``max_passes`` passes); ``tri`` and ``nbr`` in place.  With ``relax`` at
-    most the mesh's minimum radius ratio, that minimum is never lowered.  Returns the number
-    of flips."""
+    least the mesh's minimum radius ratio, that minimum is never lowered.
+    Returns the number of flips."""
     n = X.shape[0]
     count = np.zeros(n, np.int64)
     for t in range(tri.shape[0]):
