@@ -107,12 +107,13 @@ def odt_smooth(X, triangles, ptr, idx, h, n_boundary, sweeps, movable, floor, to
 
 
 @njit(cache=True)
-def mean_polish(X, triangles, ptr, idx, n_boundary, sweeps, movable, floor, halvings):
+def mean_polish(X, triangles, ptr, idx, n_boundary, sweeps, movable, floor, halvings, below):
     """Compass search on the star's mean radius ratio: from a tenth of the
     shortest incident edge, 8 directions, halved ``halvings`` times; a step is
     taken if the star's mean grows and its minimum stays at least min(its
     value before, ``floor``) (exact orientation as in :func:`odt_smooth`).
-    ``sweeps`` Gauss-Seidel sweeps; X in place.  Returns the steps taken."""
+    Only stars whose mean is below ``below`` are searched.  ``sweeps``
+    Gauss-Seidel sweeps; X in place.  Returns the steps taken."""
     taken = 0
     for _ in range(sweeps):
         moved = 0
@@ -120,6 +121,8 @@ def mean_polish(X, triangles, ptr, idx, n_boundary, sweeps, movable, floor, halv
             if not movable[i] or ptr[i + 1] == ptr[i]:
                 continue
             worst, mean = star_stats(X, triangles, ptr, idx, i, X[i, 0], X[i, 1])
+            if mean >= below:
+                continue
             need = max(min(worst, floor), 0.0)
             shortest = np.inf
             for e in range(ptr[i], ptr[i + 1]):

@@ -74,7 +74,7 @@ POOR = 0.85  # stars whose worst radius ratio is below this get the compass sear
 KEEP = 0.8  # the settling passes may lower a star's worst ratio to max(mesh minimum, KEEP)
 ODT_ROUNDS, ODT_SWEEPS = 2, 6  # ODT passes, each followed by the CDT
 FLIP_PASSES = 20
-MEAN_SWEEPS, MEAN_HALVINGS = 4, 4
+MEAN_SWEEPS, MEAN_HALVINGS, MEAN_BELOW = 4, 4, 1.0  # 1.0: every star
 
 
 class QualityWarning(UserWarning):
@@ -303,7 +303,7 @@ def _settle(X, triangles, neighbors, segments, n_b, h, movable):
     ptr, idx = stars(triangles, len(X))
     floor = max(float(triangle_quality(X, triangles).min(initial=1.0)), KEEP)
     moves += mean_polish(X, triangles, ptr, idx, n_b, MEAN_SWEEPS, movable, floor,
-                         MEAN_HALVINGS)
+                         MEAN_HALVINGS, MEAN_BELOW)
     return triangles, neighbors, moves, int(flips)
 
 

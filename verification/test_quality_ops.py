@@ -107,7 +107,7 @@ def test_odt_and_mean_polish_never_lower_the_minimum_nor_invert(loops, seed):
     mid = O.radius_ratio_reference(X, tri).min()
     assert mid >= before * (1 - 1e-12)
     mean_before = O.radius_ratio_reference(X, tri).mean()
-    mean_polish(X, tri, ptr, idx, m.n_boundary, 2, movable, mid, 3)
+    mean_polish(X, tri, ptr, idx, m.n_boundary, 2, movable, mid, 3, 1.0)
     O.check_valid(X, tri)
     q = O.radius_ratio_reference(X, tri)
     assert q.min() >= before * (1 - 1e-12)
