@@ -11,7 +11,11 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    their §2 radii (amplified, §3.1; eq. 9 is not applied, so radii cannot
    drift), stopped when the largest move falls below ``tol`` times the radius;
    the §3.5 re-triangulation; then quality-guarded smoothing
-   (:mod:`bubblemesh._smoothing`) alternating with re-triangulation.  Final
+   (:mod:`bubblemesh._smoothing`) alternating with re-triangulation; then
+   settling: size-weighted ODT alternating with re-triangulation, valence and
+   quality edge flips, a compass search on each star's mean radius ratio.
+   After the flips the mesh is valid and conforming (every segment an edge,
+   boundary nodes unmoved) but in general no longer constrained-Delaunay.  Final
    guarantee: the result's smallest radius ratio is never below the §2
    mesh's; if it were, the nodes of the offending triangles go back to their
    §2 positions, and as a last resort the §2 mesh itself is smoothed.
@@ -29,9 +33,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ._flips import ideal_counts, improve_flips, segment_keys
 from ._forces import move
 from ._inside import boundary_clearance
 from ._mesh import GenerationStats, Mesh, OptimizationStats
+from ._odt import mean_polish, odt_smooth
 from ._rings import node_adjacency, ring_neighbors, vertex_triangles
 from ._smoothing import compass_polish, guarded_smooth, stars, triangle_quality
 from ._verlet import VerletLists
@@ -39,7 +45,7 @@ from .domain import Domain
 from .errors import GeometryError, MeshingError
 from .generation import generate_sized
 from .refinement import refine_boundary
-from .sizing import SizeField, as_size_function
+from .sizing import _EQUILATERAL_RADIUS, SizeField, as_size_function
 from .timing import PhaseClock
 from .triangulation import constrained_delaunay
 
@@ -65,6 +71,10 @@ def _sharp_angle(target: float = 0.7) -> float:
 
 SHARP_ANGLE = _sharp_angle()  # ~27.2 degrees
 POOR = 0.85  # stars whose worst radius ratio is below this get the compass search
+KEEP = 0.8  # the settling passes may lower a star's worst ratio to max(mesh minimum, KEEP)
+ODT_ROUNDS, ODT_SWEEPS = 2, 6  # ODT passes, each followed by the CDT
+FLIP_PASSES = 20
+MEAN_SWEEPS, MEAN_HALVINGS, MEAN_BELOW = 4, 4, 1.0  # 1.0: every star
 
 
 class QualityWarning(UserWarning):
@@ -88,13 +98,16 @@ class RobustOptimizationStats(OptimizationStats):
     """§3's record plus: ``converged`` (the ``tol`` test fired),
     ``smoothing_moves`` (guarded moves taken), ``min_ratio_generation`` and
     ``min_ratio`` (eq. 10, before and after), ``fallback`` ("none",
-    "reverted" or "generation")."""
+    "reverted" or "generation"), ``settling_moves`` (ODT and mean-polish
+    moves) and ``flips`` (valence and quality flips) of the settling step."""
 
     converged: bool = False
     smoothing_moves: int = 0
     min_ratio_generation: float = 0.0
     min_ratio: float = 0.0
     fallback: str = "none"
+    settling_moves: int = 0
+    flips: int = 0
 
 
 def corner_angles(domain: Domain) -> np.ndarray:
@@ -198,7 +211,8 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterati
     return stable_optimize(generated, max_iterations=int(max_iterations), tol=float(tol),
                            amplification=float(amplification), alpha=float(alpha),
                            rings=int(rings), smoothing_rounds=int(smoothing_rounds),
-                           smoothing_sweeps=int(smoothing_sweeps), clock=clock)
+                           smoothing_sweeps=int(smoothing_sweeps), size_field=field,
+                           clock=clock)
 
 
 def _forces(mesh, R, max_iterations, tol, alpha, rings):
@@ -268,10 +282,50 @@ def _polish(X, triangles, neighbors, segments, n_b, rounds, sweeps, movable):
     return triangles, neighbors, moves
 
 
+def _node_sizes(mesh, X, size_field):
+    """The target edge length at every node: the size field, else the §2 radii
+    read back through eq. 2 of the equilateral triangle."""
+    if size_field is not None:
+        return np.ascontiguousarray(size_field(X), dtype=np.float64)
+    return np.asarray(mesh.radii, dtype=np.float64) / _EQUILATERAL_RADIUS
+
+
+def _settle(X, triangles, neighbors, segments, n_b, h, movable):
+    """Settle the nodes and the valences, never lowering the smallest radius
+    ratio (each pass keeps every star at least min(its worst, max(mesh minimum,
+    KEEP)); X in place): ODT (:mod:`bubblemesh._odt`) alternating with the CDT,
+    then valence and quality flips (:mod:`bubblemesh._flips`; the mesh stays
+    valid and conforming but need not be constrained-Delaunay), then a compass
+    search on each star's mean ratio.  Returns (triangles, neighbors, moves,
+    flips)."""
+    moves = 0
+    for _ in range(ODT_ROUNDS):
+        floor = max(float(triangle_quality(X, triangles).min(initial=1.0)), KEEP)
+        ptr, idx = stars(triangles, len(X))
+        taken, _ = odt_smooth(X, triangles, ptr, idx, h, n_b, ODT_SWEEPS, movable, floor, 1e-3)
+        moves += taken
+        if taken == 0:
+            break
+        tri, nbr = _triangulate(X, segments)
+        if triangle_quality(X, tri).min() >= triangle_quality(X, triangles).min():
+            triangles, neighbors = tri, nbr
+    triangles, neighbors = np.array(triangles), np.array(neighbors)
+    floor = max(float(triangle_quality(X, triangles).min(initial=1.0)), KEEP)
+    flips = improve_flips(X, triangles, neighbors, segment_keys(segments, len(X)),
+                          ideal_counts(X, triangles, len(X)), FLIP_PASSES, floor)
+    ptr, idx = stars(triangles, len(X))
+    floor = max(float(triangle_quality(X, triangles).min(initial=1.0)), KEEP)
+    moves += mean_polish(X, triangles, ptr, idx, n_b, MEAN_SWEEPS, movable, floor,
+                         MEAN_HALVINGS, MEAN_BELOW)
+    return triangles, neighbors, moves, int(flips)
+
+
 def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, alpha=0.1,
-                    rings=3, smoothing_rounds=3, smoothing_sweeps=4, clock=None) -> Mesh:
+                    rings=3, smoothing_rounds=3, smoothing_sweeps=4, settle=True,
+                    size_field=None, clock=None) -> Mesh:
     """Step 3 of the module docstring on a §2 mesh; the result's smallest eq. 10
-    radius ratio is never below ``mesh``'s."""
+    radius ratio is never below ``mesh``'s.  ``settle``: run :func:`_settle`
+    (sizes from ``size_field``, else from the §2 radii)."""
     clock = clock or PhaseClock()
     n_b, n = mesh.n_boundary, len(mesh.points)
     segments = np.asarray(mesh.segments)
@@ -283,8 +337,15 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
     clock.lap("forces")
     triangles, neighbors = _triangulate(X, segments)
     movable = np.ones(n, dtype=np.bool_)
+    movable[np.unique(segments)] = False  # segment endpoints never move
     triangles, neighbors, moves = _polish(X, triangles, neighbors, segments, n_b,
                                           smoothing_rounds, smoothing_sweeps, movable)
+    settled, flips = 0, 0
+    if settle:
+        clock.lap("smoothing")
+        triangles, neighbors, settled, flips = _settle(
+            X, triangles, neighbors, segments, n_b, _node_sizes(mesh, X, size_field), movable)
+        clock.lap("settling")
     fallback = "none"
     for _ in range(8):  # the guarantee: revert the nodes of triangles below q0
         q = triangle_quality(X, triangles)
@@ -305,6 +366,7 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
         triangles = np.array(mesh.triangles)
         neighbors = np.array(mesh.neighbors)
         movable[:] = True
+        movable[np.unique(segments)] = False
         triangles, neighbors, moves = _polish(X, triangles, neighbors, segments, n_b,
                                               smoothing_rounds, smoothing_sweeps, movable)
     clock.lap("smoothing")
@@ -314,7 +376,7 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
         list_builds=builds, list_layouts=0, amplification=amplification, rings=rings,
         alpha=alpha, seconds=clock.total(), phases=dict(clock.seconds),
         converged=largest < tol, smoothing_moves=int(moves), min_ratio_generation=q0,
-        min_ratio=q_final, fallback=fallback)
+        min_ratio=q_final, fallback=fallback, settling_moves=int(settled), flips=flips)
     return Mesh(points=X, triangles=triangles, neighbors=neighbors, radii=R, segments=segments,
                 n_boundary=n_b, domain=mesh.domain, generation=mesh.generation,
                 optimization=stats)

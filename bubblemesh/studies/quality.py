@@ -1,12 +1,16 @@
 """Quality study of the robust mesher bm.mesh against Triangle -pq30 and Gmsh
 Frontal-Delaunay (Mesh.Algorithm=6) on the same input at matched element counts.
 
-    python -m bubblemesh.studies.quality [--data DIR] [--big]
+    python -m bubblemesh.studies.quality [--data DIR] [--out DIR] [--big]
 
-``--data``: a folder with Triangle's example A.poly and double_hex3.poly (from
-Triangle's distribution; skipped if absent).  Prints one table row per case
-and mesher, then the iteration sweeps on graded domains, the size test and
-(``--big``) timings at 100k and 1M elements against the paper's path.
+Gmsh and Triangle get bm's refined boundary nodes; Gmsh also bm's size field
+(scaled until the counts match within 3%).  ``--data``: a folder with
+Triangle's example A.poly and double_hex3.poly (skipped if absent).  Prints,
+per case, each mesher's element count (and bm's over what the size field
+predicts), minimum and mean radius ratio and count below 0.7, with the winners
+of each; ``--out`` writes that table as quality_vs_gmsh.csv.  Then the
+iteration sweeps, the size test and (``--big``) bm against Gmsh at 100k
+elements.
 """
 
 from __future__ import annotations
@@ -52,100 +56,161 @@ def _random_polygon(rng, holes):
     return loops
 
 
+def _paper_loops():
+    """The four paper cases' loops, as shipped with the package."""
+    from .case import paper_cases
+
+    return {name: [np.asarray(lp) for lp in case.loops] for name, case in paper_cases().items()}
+
+
 def cases(data: Path | None):
-    yield "L-shape", [np.array([(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)], float)]
+    """(name, loops, bm.mesh keyword arguments): corner-only inputs get
+    max_area = area / 200, the others their own spacing."""
+    for name, loops in _paper_loops().items():
+        yield name, loops, {}
+    per200 = "per200"
+    yield "L-shape", [np.array([(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)], float)], per200
     t = np.linspace(0, math.pi, 33)
-    yield "half-disk", [np.column_stack([np.cos(t), np.sin(t)])]
+    yield "half-disk", [np.column_stack([np.cos(t), np.sin(t)])], per200
     for name in ("A", "double_hex3"):
         path = None if data is None else data / f"{name}.poly"
         if path is not None and path.exists():
             d = bm.Domain.from_poly(path)
-            yield f"{name}.poly", [np.asarray(d.points)[ix] for ix in d.loops]
+            yield f"{name}.poly", [np.asarray(d.points)[ix] for ix in d.loops], per200
     yield "square-square-hole", [np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float),
-                                 np.array([(.4, .4), (.6, .4), (.6, .6), (.4, .6)], float)]
-    rng = np.random.default_rng(7)
-    for k in range(8):
-        loops = _random_polygon(rng, k % 4)
-        try:
-            bm.Domain.from_loops(loops)
-        except bm.GeometryError:
-            continue  # a hole crossed the outer loop: not a valid input
-        yield f"random-{k}-holes{k % 4}", loops
+                                 np.array([(.4, .4), (.6, .4), (.6, .6), (.4, .6)], float)], per200
+    yield "graded square+hole", [_square(10.0, 0.5), _circle((5, 5), 0.05, 0.005)], {}
+    yield "perforated plate", [_square(10.0, 0.25)] + [
+        _circle((2 + 2 * i, 2 + 2 * j), 0.4, 0.05) for i in range(4) for j in range(4)], {}
+    yield "channel+cylinder", [np.array([(0, 0), (20, 0), (20, 1), (0, 1)], float),
+                               _circle((2.0, 0.5), 0.15, 0.02)], {}
 
 
 def _stats(points, triangles):
     q = radius_ratio(np.asarray(points), np.asarray(triangles))
-    return len(triangles), float(q.min()), float(q.mean()), float(np.mean(q < 0.5))
+    return len(triangles), float(q.min()), float(q.mean()), int(np.sum(q < 0.7))
 
 
-def run_triangle(domain, count):
+def predicted_count(mesh, field):
+    """Elements the size field asks for: sum of area / (equilateral area of
+    side h(centroid)) over the mesh's triangles."""
+    p = np.asarray(mesh.points)
+    t = np.asarray(mesh.triangles)
+    a, b, c = p[t[:, 0]], p[t[:, 1]], p[t[:, 2]]
+    area = 0.5 * np.abs((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1])
+                        - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+    h = field((a + b + c) / 3.0)
+    return float(np.sum(area / (math.sqrt(3) / 4 * h * h)))
+
+
+def run_triangle(mesh, hole_points, count):
+    """Triangle -pq30 on bm's refined boundary, the area bound tuned to count."""
     import triangle
 
-    area = domain.area / max(count, 2) * 1.0
-    pts = dict(vertices=np.array(domain.points), segments=np.array(domain.segments))
-    if len(domain.hole_points):
-        pts["holes"] = np.array(domain.hole_points)
-    for _ in range(4):  # match the element count
+    area = mesh.domain.area / max(count, 2) * 1.0
+    pts = dict(vertices=np.array(mesh.domain.points), segments=np.array(mesh.domain.segments))
+    if len(hole_points):
+        pts["holes"] = np.array(hole_points)
+    for _ in range(5):  # match the element count
         out = triangle.triangulate(pts, f"pq30a{area:.17g}Q")
         n = len(out["triangles"])
-        if abs(n - count) < 0.05 * count:
+        if abs(n - count) < 0.03 * count:
             break
         area *= n / count
     return out["vertices"], out["triangles"]
 
 
-def run_gmsh(domain, count):
+def run_gmsh(mesh, field, count, algorithm=6):
+    """Gmsh (Frontal-Delaunay by default) on bm's refined boundary nodes, no
+    further boundary splits, sizes from bm's size field times a factor tuned
+    until the element count is within 3% of count.  Returns (points,
+    triangles, seconds of the last run)."""
     import gmsh
 
-    h = math.sqrt(4 * domain.area / (math.sqrt(3) * max(count, 2)))
-    P = np.asarray(domain.points)
-    for _ in range(4):
+    P = np.asarray(mesh.domain.points)
+    scale = 1.0
+    for _ in range(6):
+        t0 = time.perf_counter()
         gmsh.initialize()
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.model.add("m")
         loops = []
-        for ix in domain.loops:
-            tags = [gmsh.model.geo.addPoint(*P[i], 0.0, h) for i in ix]
+        for ix in mesh.domain.loops:
+            tags = [gmsh.model.geo.addPoint(*P[i], 0.0) for i in ix]
             lines = [gmsh.model.geo.addLine(tags[k], tags[(k + 1) % len(tags)])
                      for k in range(len(tags))]
             loops.append(gmsh.model.geo.addCurveLoop(lines))
         gmsh.model.geo.addPlaneSurface(loops)
         gmsh.model.geo.synchronize()
-        gmsh.option.setNumber("Mesh.Algorithm", 6)
-        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+        for _, tag in gmsh.model.getEntities(1):
+            gmsh.model.mesh.setTransfiniteCurve(tag, 2)  # keep the given boundary nodes
+        gmsh.model.mesh.setSizeCallback(
+            lambda dim, tag, x, y, z, lc, f=scale: float(field(np.array([[x, y]]))[0]) * f)
+        for option in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints",
+                       "MeshSizeFromCurvature"):
+            gmsh.option.setNumber(f"Mesh.{option}", 0)
+        gmsh.option.setNumber("Mesh.Algorithm", algorithm)
         gmsh.model.mesh.generate(2)
         tags, xyz, _ = gmsh.model.mesh.getNodes()
         _, _, conn = gmsh.model.mesh.getElements(2)
         gmsh.finalize()
+        seconds = time.perf_counter() - t0
         index = np.zeros(int(tags.max()) + 1, np.int64)
         index[tags.astype(np.int64)] = np.arange(len(tags))
         tri = index[np.asarray(conn[0], np.int64).reshape(-1, 3)]
         pts = xyz.reshape(-1, 3)[:, :2]
-        if abs(len(tri) - count) < 0.05 * count:
+        if abs(len(tri) - count) < 0.03 * count:
             break
-        h *= math.sqrt(len(tri) / count)
-    return pts, tri
+        scale *= math.sqrt(len(tri) / count)
+    return pts, tri, seconds
 
 
-def quality_table(data):
-    print(f"{'case':24s} {'mesher':12s} {'N':>6s} {'min':>6s} {'mean':>6s} {'<0.5':>6s}")
-    for name, loops in cases(data):
+def _winners(rows, key, best):
+    value = best(r[key] for r in rows)
+    return "+".join(r["mesher"] for r in rows if r[key] == value)
+
+
+def quality_table(data, out_dir=None):
+    from bubblemesh.pipeline import _user_size
+    from bubblemesh.sizing import SizeField
+
+    header = ["case", "mesher", "N", "N/predicted", "min", "mean", "below_0.7",
+              "wins_mean", "wins_min", "wins_below_0.7"]
+    print(f"{'case':26s} {'mesher':9s} {'N':>7s} {'N/pred':>6s} {'min':>6s} {'mean':>7s} "
+          f"{'<0.7':>5s}  winners (mean / min / <0.7)")
+    table = []
+    for name, loops, kwargs in cases(data):
         domain = bm.Domain.from_loops(loops)
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", bm.QualityWarning)
-            default = bm.mesh(domain)
-            # a mesh of some size: at least ~200 elements
-            area = domain.area / 200
-            m = bm.mesh(domain, max_area=area)
-        note = f"  ({len(caught) // 2} sharp-corner warnings)" if caught else ""
-        rows = [("bm default", default.points, default.triangles),
-                ("bm max_area", m.points, m.triangles)]
+        if kwargs == "per200":
+            kwargs = {"max_area": domain.area / 200}
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", bm.QualityWarning)
+            m = bm.mesh(domain, **kwargs)
+        field = SizeField.from_domain(domain, size=_user_size(kwargs.get("size"),
+                                                              kwargs.get("max_area")))
         count = len(m.triangles)
-        rows.append(("triangle", *run_triangle(domain, count)))
-        rows.append(("gmsh", *run_gmsh(domain, count)))
-        for mesher, p, t in rows:
+        predicted = predicted_count(m, field)
+        rows = []
+        for mesher, (p, t) in (("bm", (m.points, m.triangles)),
+                               ("gmsh", run_gmsh(m, field, count)[:2]),
+                               ("triangle", run_triangle(m, domain.hole_points, count))):
             n, qmin, qmean, low = _stats(p, t)
-            print(f"{name:24s} {mesher:12s} {n:6d} {qmin:6.3f} {qmean:6.4f} {low:6.3f}{note}")
+            rows.append(dict(case=name, mesher=mesher, N=n, min=round(qmin, 4),
+                             mean=round(qmean, 4), below=low,
+                             ratio=round(n / predicted, 3)))
+        wins = (_winners(rows, "mean", max), _winners(rows, "min", max),
+                _winners(rows, "below", min))
+        for r in rows:
+            print(f"{name:26s} {r['mesher']:9s} {r['N']:7d} {r['ratio']:6.2f} {r['min']:6.3f} "
+                  f"{r['mean']:7.4f} {r['below']:5d}  {' / '.join(wins) if r is rows[0] else ''}")
+            table.append([name, r["mesher"], r["N"], r["ratio"], r["min"], r["mean"],
+                          r["below"], *wins])
+    if out_dir is not None:
+        import csv
+
+        out_dir.mkdir(parents=True, exist_ok=True)
+        with (out_dir / "quality_vs_gmsh.csv").open("w", newline="") as f:
+            csv.writer(f).writerows([header, *table])
 
 
 def sweeps():
@@ -183,23 +248,27 @@ def size_test():
               f"{np.mean((r >= 0.8) & (r <= 1.25)):.3f}, median {np.median(r):.3f}")
 
 
-def timings(sizes=(100_000, 1_000_000), repeats=3):
-    for n in sizes:
-        k = int(math.sqrt(n / 2.3))  # a disk of that many elements in paper mode
-        t = np.linspace(0, 2 * math.pi, int(2 * math.pi * math.sqrt(n / 2.3) * 0.9),
-                        endpoint=False)
-        domain = bm.Domain.from_loops([np.column_stack([np.cos(t), np.sin(t)])])
-        best = {"paper": math.inf, "robust": math.inf}
-        counts = {}
-        for _ in range(repeats):  # alternating
-            for label in ("paper", "robust"):
-                t0 = time.perf_counter()
-                m = bm.mesh(domain, paper=(label == "paper"))
-                best[label] = min(best[label], time.perf_counter() - t0)
-                counts[label] = len(m.triangles)
-        print(f"disk ~{n} ({k}): paper {counts['paper']} el {best['paper']:.2f} s, robust "
-              f"{counts['robust']} el {best['robust']:.2f} s, ratio "
-              f"{best['robust'] / best['paper']:.2f}")
+def timings(n=100_000, repeats=3):
+    """bm.mesh against Gmsh Frontal-Delaunay (same boundary nodes, same size)
+    on a unit disk of about n elements: the minimum of ``repeats`` alternating
+    runs each (the machine may be shared)."""
+    from bubblemesh.sizing import SizeField
+
+    h = math.sqrt(math.pi / (n * math.sqrt(3) / 4))
+    t = np.linspace(0, 2 * math.pi, int(round(2 * math.pi / h)), endpoint=False)
+    domain = bm.Domain.from_loops([np.column_stack([np.cos(t), np.sin(t)])])
+    field = SizeField.from_domain(domain, size=h)
+    bm.mesh(domain, size=20 * h)  # compile outside the clock
+    best = {"bm": math.inf, "gmsh": math.inf}
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        m = bm.mesh(domain, size=h)
+        best["bm"] = min(best["bm"], time.perf_counter() - t0)
+        _, tri, seconds = run_gmsh(m, field, len(m.triangles))
+        best["gmsh"] = min(best["gmsh"], seconds)
+    print(f"disk ~{n}: bm {len(m.triangles)} el {best['bm']:.2f} s, gmsh frontal {len(tri)} el "
+          f"{best['gmsh']:.2f} s (min of {repeats}), gmsh / bm {best['gmsh'] / best['bm']:.2f}; "
+          f"bm phases {dict((k, round(v, 3)) for k, v in m.optimization.phases.items())}")
 
 
 def main():
@@ -207,9 +276,11 @@ def main():
     parser.add_argument("--data", type=Path, default=None)
     parser.add_argument("--big", action="store_true")
     parser.add_argument("--skip-table", action="store_true")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="write quality_vs_gmsh.csv into this folder")
     args = parser.parse_args()
     if not args.skip_table:
-        quality_table(args.data)
+        quality_table(args.data, args.out)
     sweeps()
     size_test()
     if args.big:

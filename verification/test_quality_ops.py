@@ -1,0 +1,171 @@
+"""The settling operations of bm.mesh: valence/quality flips (bubblemesh._flips),
+ODT smoothing and the mean compass search (bubblemesh._odt), and the settled
+pipeline: validity, conformity, the never-worse minimum, fixed boundary nodes,
+determinism at any thread count.
+
+Oracles: verification/oracles.py (exact orientation and conformity, the radius
+ratio from the classical formulas), numpy valence counts and angle sums, not
+the kernels themselves."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import warnings
+
+import numpy as np
+import oracles as O
+import strategies as S
+from hypothesis import given
+from hypothesis import strategies as st
+from test_pipeline import corner_domains
+
+import bubblemesh as bm
+from bubblemesh import pipeline
+from bubblemesh._flips import ideal_counts, improve_flips, segment_keys
+from bubblemesh._odt import mean_polish, odt_smooth
+from bubblemesh._smoothing import stars
+from bubblemesh.generation import generate_sized
+from bubblemesh.refinement import refine_boundary
+from bubblemesh.sizing import SizeField
+
+
+def _sized(loops, size):
+    domain = bm.Domain.from_loops(loops)
+    field = SizeField.from_domain(domain, size=size)
+    return generate_sized(refine_boundary(domain, field).to_domain(), field), field
+
+
+def _valence_energy(X, tri):
+    """sum_v (triangles at v - round(angle sum / 60 degrees))^2, in numpy."""
+    count = np.bincount(tri.ravel(), minlength=len(X))
+    total = np.zeros(len(X))
+    for k in range(3):
+        i, j, m = tri[:, k], tri[:, (k + 1) % 3], tri[:, (k + 2) % 3]
+        u, v = X[j] - X[i], X[m] - X[i]
+        cos = (u * v).sum(1) / np.hypot(*u.T) / np.hypot(*v.T)
+        np.add.at(total, i, np.arccos(np.clip(cos, -1, 1)))
+    ideal = np.maximum(1, np.round(total / (np.pi / 3)))
+    return float(((count - ideal) ** 2).sum())
+
+
+@given(corner_domains(max_holes=2), st.sampled_from([0.3, 0.2]), st.floats(0.0, 1.0),
+       st.integers(0, 2**32 - 1))
+def test_flips_keep_the_mesh_valid_conforming_and_never_lower_the_minimum(loops, size, relax,
+                                                                          seed):
+    m, _ = _sized(loops, size)
+    X = np.array(m.points)
+    rng = np.random.default_rng(seed)
+    inner = slice(m.n_boundary, None)  # jitter so that flips are worth making
+    X[inner] += rng.uniform(-0.15, 0.15, X[inner].shape) * m.radii[inner, None]
+    tri, nbr = bm.constrained_delaunay(X, m.segments)
+    tri, nbr = np.array(tri), np.array(nbr)
+    before_q = O.radius_ratio_reference(X, tri).min()
+    before_e = _valence_energy(X, tri)
+    relax = max(relax, before_q)  # at least the minimum: the minimum must survive
+    improve_flips(X, tri, nbr, segment_keys(np.asarray(m.segments), len(X)),
+                  ideal_counts(X, tri, len(X)), 20, relax)
+    O.check_valid(X, tri, nbr)
+    O.check_conforming(X, tri, m.segments, area=m.domain.area, rel=1e-9)
+    assert O.radius_ratio_reference(X, tri).min() >= before_q * (1 - 1e-12)
+    assert _valence_energy(X, tri) <= before_e
+
+
+def test_a_flip_fixes_a_valence_defect_and_never_flips_a_segment():
+    """A square split along its diagonal 0-2 by four nodes around it: with the
+    diagonal a segment nothing may flip it; without, the flip to 1-3 is taken
+    exactly when the quadrilateral is convex."""
+    X = np.array([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)])
+    tri = np.array([[0, 1, 2], [0, 2, 3]])
+    nbr = np.array([[-1, 1, -1], [-1, -1, 0]])
+    ideal = np.array([1, 2, 1, 2])  # 1 and 3 "want" a second triangle: a strict gain
+    segs = np.array([[0, 1], [1, 2], [2, 3], [3, 0], [0, 2]])
+    t2, n2 = tri.copy(), nbr.copy()
+    assert improve_flips(X, t2, n2, segment_keys(segs, 4), ideal, 5, 0.0) == 0
+    np.testing.assert_array_equal(t2, tri)
+    assert improve_flips(X, tri, nbr, segment_keys(segs[:4], 4), ideal, 5, 0.0) == 1
+    O.check_valid(X, tri, nbr)
+    assert {frozenset(t) for t in tri.tolist()} == {frozenset((0, 1, 3)), frozenset((1, 2, 3))}
+    Y = np.array([(0.7, 0.5), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)])  # reflex at 0: no flip
+    tri = np.array([[0, 1, 2], [0, 2, 3]])
+    nbr = np.array([[-1, 1, -1], [-1, -1, 0]])
+    assert improve_flips(Y, tri, nbr, segment_keys(segs[:4], 4), ideal, 5, 0.0) == 0
+
+
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_odt_and_mean_polish_never_lower_the_minimum_nor_invert(loops, seed):
+    m, field = _sized(loops, 0.2)
+    X = np.array(m.points)
+    tri = np.array(m.triangles)
+    rng = np.random.default_rng(seed)
+    movable = rng.random(len(X)) < 0.7
+    before = O.radius_ratio_reference(X, tri).min()
+    ptr, idx = stars(tri, len(X))
+    odt_smooth(X, tri, ptr, idx, field(X), m.n_boundary, 4, movable, before, 0.0)
+    O.check_valid(X, tri)
+    mid = O.radius_ratio_reference(X, tri).min()
+    assert mid >= before * (1 - 1e-12)
+    mean_before = O.radius_ratio_reference(X, tri).mean()
+    mean_polish(X, tri, ptr, idx, m.n_boundary, 2, movable, mid, 3, 1.0)
+    O.check_valid(X, tri)
+    q = O.radius_ratio_reference(X, tri)
+    assert q.min() >= before * (1 - 1e-12)
+    assert q.mean() >= mean_before - 1e-12  # each step raises its star's mean
+    np.testing.assert_array_equal(X[~movable], np.asarray(m.points)[~movable])
+    np.testing.assert_array_equal(X[: m.n_boundary], np.asarray(m.points)[: m.n_boundary])
+
+
+@S.budget(15)
+@given(S.domains(max_holes=2, graded=True, min_spacing=0.2))
+def test_settled_meshes_of_graded_domains_are_valid_conforming_and_never_worse(case):
+    domain = bm.Domain.from_loops(list(case.loops))
+    field = SizeField.from_domain(domain)
+    generated = generate_sized(refine_boundary(domain, field).to_domain(), field)
+    out = pipeline.stable_optimize(generated, max_iterations=40, size_field=field)
+    O.check_valid(out.points, out.triangles, out.neighbors)
+    O.check_conforming(out.points, out.triangles, out.segments, area=generated.domain.area,
+                       rel=1e-9)
+    before = O.radius_ratio_reference(generated.points, generated.triangles).min()
+    assert O.radius_ratio_reference(out.points, out.triangles).min() >= before * (1 - 1e-12)
+    np.testing.assert_array_equal(out.points[: out.n_boundary],
+                                  generated.points[: generated.n_boundary])
+
+
+def test_settling_raises_the_mean_on_a_corner_only_square_with_a_hole():
+    loops = [np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float),
+             np.array([(.4, .4), (.4, .6), (.6, .6), (.6, .4)], float)]
+    m, field = _sized(loops, 0.05)
+    plain = pipeline.stable_optimize(m, settle=False)
+    settled = pipeline.stable_optimize(m, size_field=field)
+    q0 = O.radius_ratio_reference(plain.points, plain.triangles)
+    q1 = O.radius_ratio_reference(settled.points, settled.triangles)
+    assert q1.mean() > q0.mean() and q1.min() >= q0.min() * (1 - 1e-12)
+
+
+_DIGEST = """
+import hashlib, numpy as np, bubblemesh as bm
+d = bm.Domain.from_loops([np.array([(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)], float),
+                          np.array([(.3, .3), (.3, .6), (.6, .6), (.6, .3)], float)])
+m = bm.mesh(d, size=0.08)
+h = hashlib.sha256()
+for a in (m.points, m.triangles, m.neighbors):
+    h.update(np.ascontiguousarray(a).tobytes())
+print(h.hexdigest())
+"""
+
+
+def test_the_settled_mesh_is_the_same_bits_at_any_thread_count():
+    digests = set()
+    for threads in ("1", "2"):
+        env = dict(os.environ, NUMBA_NUM_THREADS=threads)
+        out = subprocess.run([sys.executable, "-c", _DIGEST], env=env, capture_output=True,
+                             text=True, check=True)
+        digests.add(out.stdout.strip())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scope: dict = {}
+        exec(compile(_DIGEST.replace("print(h.hexdigest())", "digest = h.hexdigest()"),
+                     "<digest>", "exec"), scope)
+    digests.add(scope["digest"])
+    assert len(digests) == 1, digests
