@@ -4,6 +4,7 @@ pyproject's list installs nothing, and only an installed run notices)."""
 from __future__ import annotations
 
 import pathlib
+
 import tomllib
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
