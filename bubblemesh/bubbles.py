@@ -15,6 +15,8 @@ from collections.abc import Sequence
 import numpy as np
 from numba import njit
 
+__all__ = ["boundary_radii", "element_radius", "triangle_area"]
+
 BOUNDARY_FACTOR = math.sqrt(3.0) / (8.0 * math.pi)  # eq. 2
 
 

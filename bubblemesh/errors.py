@@ -6,6 +6,8 @@ valid refined boundary); the message names the offending loop/segment.
 away) or an internal invariant fails; it is never silently ignored.
 """
 
+__all__ = ["GeometryError", "MeshingError"]
+
 
 class GeometryError(ValueError):
     """Invalid input geometry: the message says what is wrong and where."""

@@ -17,6 +17,8 @@ unsigned index has no negative values to wrap.  Only for indices known to be
 import numba
 import numpy as np
 
+__all__ = ["prefetch", "unsigned"]
+
 
 @numba.njit(cache=True, inline="always")
 def unsigned(index):

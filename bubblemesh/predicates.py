@@ -28,6 +28,8 @@ when ``NUMBA_DISABLE_JIT=1``.
 import numpy as np
 from numba import njit
 
+__all__ = ["incircle", "orient2d", "out_of_range", "out_of_range_message"]
+
 _EPS = 2.0**-53  # half an ulp of 1.0: the unit round-off of float64
 _SPLITTER = 2.0**27 + 1.0  # Dekker's splitter for 53-bit doubles
 CCW_ERRBOUND = (3.0 + 16.0 * _EPS) * _EPS

@@ -8,6 +8,8 @@ triangle, tending to 0 as the triangle degenerates.
 import numpy as np
 from numpy.typing import ArrayLike
 
+__all__ = ["angles", "radius_ratio", "summary"]
+
 
 def _side_lengths(points: ArrayLike, triangles: ArrayLike
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -13,6 +13,8 @@ import math
 
 import numba
 
+__all__ = ["roots_and_reciprocals"]
+
 if numba.config.DISABLE_JIT:  # type: ignore[attr-defined]
 
     def roots_and_reciprocals(a, b):

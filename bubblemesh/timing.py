@@ -4,6 +4,8 @@ the paper's method."""
 
 import time
 
+__all__ = ["PhaseClock"]
+
 
 class PhaseClock:
     """``lap(phase)`` adds the time since the previous lap (or the start) to
