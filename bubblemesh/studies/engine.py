@@ -222,7 +222,7 @@ def _client(address, workers, timeout, say):
                            resources={TIMING: 1}, host="127.0.0.1", dashboard_address=None,
                            # no dashboard; its health endpoints on a free loopback port
                            scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
-                           silence_logs=logging.ERROR)
+                           silence_logs=logging.CRITICAL)  # shutdown races are not errors
     return Client(cluster), cluster, "a local dask cluster on this machine"
 
 

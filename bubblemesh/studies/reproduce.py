@@ -57,7 +57,7 @@ def main(cases: Sequence[str] | None = None, out: str | Path = "reports", *,
     out.mkdir(parents=True, exist_ok=True)
     say = (lambda m: print(m, file=sys.stderr, flush=True)) if progress else (lambda m: None)
     say(f"reproduce: {len(study.cases)} case(s) × {len(study.methods)} methods "
-        f"(bubblemesh §2, §2+§3 and {len(study.methods) - 2} peers) into {out}")
+        f"(bubblemesh §2, §2+§3, the default mesher and {len(study.methods) - 3} peers) into {out}")
     run = run_study(study, out, scheduler=scheduler, progress=progress,
                     retry_failed=retry_failed, say=say)
     render(study, run.table, out, run, command(study, cases, cases_dir, out))
