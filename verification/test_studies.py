@@ -373,8 +373,8 @@ def test_reproduce_checks_its_arguments_before_meshing(monkeypatch, capsys, tmp_
 
 def test_shipped_definitions_load():
     paper = load_study("paper")
-    assert [c.name for c in paper.cases][0] == "fig3_circle" and len(paper.methods) == 9
-    assert paper.report == "paper" and len(paper.cells()) == 36
+    assert [c.name for c in paper.cases][0] == "fig3_circle" and len(paper.methods) == 10
+    assert paper.report == "paper" and len(paper.cells()) == 40
     sweep = load_study("iterations")
     assert len(sweep.cells()) >= 200 and sweep.x == ("max_iterations", "steps")
 

@@ -60,13 +60,14 @@ def basic_check(case: Case, points: np.ndarray, triangles: np.ndarray) -> str:
 
 
 def exact_check(case: Case, points: np.ndarray, triangles: np.ndarray) -> str:
-    """The exact checks of :mod:`bubblemesh.verify` against the case's boundary
-    (validity, conformity with split segments allowed, constrained Delaunay,
-    boundary nodes unmoved): ``"ok"`` or ``"failed: <kinds and counts>"``."""
+    """The exact checks of :mod:`bubblemesh.verify` against the case's boundary:
+    validity, conformity (split segments allowed), boundary nodes unmoved; not
+    the Delaunay property, which not every mesher claims.  ``"ok"`` or
+    ``"failed: <kinds and counts>"``."""
     from bubblemesh.verify import check
 
     domain = case.domain()
-    report = check(points, triangles, domain.segments, domain.points)
+    report = check(points, triangles, domain.segments, domain.points, delaunay=False)
     if report.ok:
         return "ok"
     kinds = sorted({v.kind for v in report.violations})
