@@ -18,10 +18,12 @@ for extra in project["optional-dependencies"].values():
 
 pins = {}
 for requirement in requirements:
-    match = re.fullmatch(r"\s*([A-Za-z0-9_.\-]+)\s*>=\s*([^,;\s]+)\s*", requirement)
+    if ";" in requirement:  # an environment marker (e.g. tomli before 3.11): not pinned here
+        continue
+    match = re.fullmatch(r"\s*([A-Za-z0-9_.\-]+)(\[[^\]]*\])?\s*>=\s*([^,\s]+)\s*", requirement)
     if match is None:
         sys.exit(f"lower_bounds: no plain '>=' lower bound in {requirement!r}")
-    pins[match[1].lower()] = match[2]
+    pins[match[1].lower()] = match[3]
 Path(sys.argv[1]).write_text(
     "".join(f"{name}=={version}\n" for name, version in sorted(pins.items()))
 )
