@@ -98,9 +98,18 @@ def constrained_delaunay(points: ArrayLike, segments: ArrayLike
     domain boundary and the interior constraints)."""
     P = _as_points(points)
     S = _writable(segments, np.int64).reshape(-1, 2)
+    tri, nbr, con, ntri = ghost_constrained(P, S, segment_flags(S))
+    keep = interior_mask(tri, nbr, con, ntri)
+    return compact(tri[:ntri], nbr[:ntri], keep, con[:ntri])
+
+
+def ghost_constrained(P: np.ndarray, S: np.ndarray, flags: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """The constrained triangulation with ghosts, before any removal: (tri, nbr,
+    con, ntri), segment s's edge flagged ``flags[s]``; GeometryError naming
+    the segments at fault."""
     if S.size and (S.min() < 0 or S.max() >= P.shape[0]):
         raise GeometryError("a segment refers to a point index out of range")
-    flags = segment_flags(S)
     # Stacks for a few thousand crossed edges per segment; a recovery that needs
     # more reruns the whole (deterministic) triangulation with 4x the room.
     capacity = min(4 * len(P) + 64, 1 << 16)
@@ -123,8 +132,7 @@ def constrained_delaunay(points: ArrayLike, segments: ArrayLike
         else:
             where += ")"
         raise_for(status, "constrained delaunay", where)
-    keep = interior_mask(tri, nbr, con, ntri)
-    return compact(tri[:ntri], nbr[:ntri], keep, con[:ntri])
+    return tri, nbr, con, ntri
 
 
 def segment_flags(segments: np.ndarray) -> np.ndarray:
