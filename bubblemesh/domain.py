@@ -184,7 +184,8 @@ class Domain:
             try:
                 return cls._from_graph(poly.vertices, poly.segments, markers, poly.holes,
                                        poly.regions, names, mode="enclosed",
-                                       convex_hull=closed, boundary_zero=1)
+                                       convex_hull=closed, boundary_zero=1,
+                                       first_index=poly.first_index)
             except GeometryError as error:
                 if closed or convex_hull is not None or "no domain" not in str(error):
                     raise GeometryError(f"{path}: {error}") from None
@@ -252,11 +253,17 @@ class Domain:
 
     @classmethod
     def _from_graph(cls, vertices, segments, markers, holes, regions, names, *, mode,
-                    flags=None, convex_hull=False, boundary_zero=None) -> Domain:
+                    flags=None, convex_hull=False, boundary_zero=None,
+                    first_index=0) -> Domain:
         from bubblemesh._pslg import build
 
         graph = build(vertices, segments, markers, holes=holes, regions=regions, mode=mode,
                       flags=flags, convex_hull=convex_hull)
+        if len(graph.dropped):  # Triangle would keep it as a node of no triangle
+            v = int(graph.dropped[0])
+            x, y = np.asarray(vertices, np.float64)[v].tolist()
+            raise GeometryError(f"vertex {v + first_index} at ({x!r}, {y!r}) is on no segment "
+                                "of the domain and lies outside it (or in a hole)")
         marks = np.array(graph.markers, np.int64)
         if boundary_zero is not None:  # Triangle: a boundary segment marked 0 gets 1
             from bubblemesh._cdt import BOUNDARY

@@ -424,9 +424,20 @@ def write_mesh(
     point_data: dict[str, np.ndarray] | None = None,
     cell_data: dict[str, np.ndarray] | None = None,
     file_format: str | None = None,
+    lines: tuple[np.ndarray, np.ndarray] | None = None,
+    regions: np.ndarray | None = None,
+    names: dict[str, int] | None = None,
     **meshio_kwargs: Any,
 ) -> None:
     """Write a triangle mesh with meshio; the format follows the file suffix.
+
+    ``lines`` = (edges (E, 2), markers (E,)) adds the boundary and interface
+    edges as a second block of line cells, tagged with their markers (Gmsh
+    physical and geometrical tags, cell data ``marker``; 0 for the triangle
+    data on lines), ``regions`` the triangles' tags (default 1) and ``names``
+    the marker names as physical names.  XDMF keeps the triangles only (one
+    cell type per file, as dolfinx reads it; ``bubblemesh.interop.write_xdmf``
+    writes the facets beside it).
 
     ``.msh`` is written as binary Gmsh 2.2 (the most widely read version) and
     XDMF with its data inline as XML (one file, no ``.h5`` beside it); pass
@@ -445,16 +456,30 @@ def write_mesh(
     triangles = np.asarray(triangles, dtype=np.int64)
     points3 = np.column_stack([points, np.zeros(len(points))])
     cells = {name: [np.asarray(values)] for name, values in (cell_data or {}).items()}
+    blocks = [("triangle", triangles)]
+    tags = np.ones(len(triangles), np.int32) if regions is None else np.asarray(regions, np.int32)
     if file_format == "gmsh22":
-        # Gmsh elements carry physical and geometrical tags; tag every triangle 1.
-        ones = np.ones(len(triangles), dtype=np.int32)
-        cells.setdefault("gmsh:physical", [ones])
-        cells.setdefault("gmsh:geometrical", [ones])
+        # Gmsh elements carry physical and geometrical tags (triangles: their region)
+        cells.setdefault("gmsh:physical", [tags])
+        cells.setdefault("gmsh:geometrical", [tags])
+    field_data = {}
+    if lines is not None and len(lines[0]) and file_format != "xdmf":
+        edges, marks = np.asarray(lines[0], np.int64), np.asarray(lines[1], np.int32)
+        blocks.append(("line", edges))
+        if file_format == "gmsh22":  # meshio's Gmsh 2.2 reader splits other element data wrongly
+            cells = {name: v for name, v in cells.items() if name.startswith("gmsh:")}
+        for name, values in cells.items():
+            values.append(marks if name.startswith("gmsh:") else
+                          np.zeros(len(edges), values[0].dtype))
+        if file_format != "gmsh22":
+            cells["marker"] = [tags, marks]
+        field_data = {name: np.array([marker, 1]) for name, marker in (names or {}).items()}
     mesh = meshio.Mesh(
         points3,
-        [("triangle", triangles)],
+        blocks,
         point_data={name: np.asarray(v) for name, v in (point_data or {}).items()},
         cell_data=cells,
+        field_data=field_data,
     )
     # (Gmsh stays binary: meshio's ASCII writer prints numpy 2 scalars as "np.float64(...)")
     options = {"data_format": "XML"} if file_format == "xdmf" else {}
