@@ -36,6 +36,7 @@ import numpy as np
 from numba import njit, prange
 
 from bubblemesh.domain import Domain
+from bubblemesh.errors import GeometryError
 from bubblemesh.predicates import orient2d
 from bubblemesh.sizing import MAX_SOURCES, SizeField, as_size_function
 
@@ -91,7 +92,10 @@ class RefinedBoundary:
         marks = np.asarray(source.markers)[origin]
         interior = np.asarray(source.interior)
         if not interior.any() and len(source.points) == sum(len(ix) for ix in source.loops):
-            domain = Domain.from_loops(self.loops)
+            try:
+                domain = Domain.from_loops(self.loops)
+            except GeometryError:  # islands in holes: only the planar-graph reading nests
+                return _graph_domain(self, source, marks, interior[origin])
             if source.segment_markers is None and not source.marker_names and (
                     source.regions is None):
                 return domain

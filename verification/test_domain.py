@@ -911,7 +911,7 @@ def test_from_poly_reads_a_node_file_when_vertex_count_is_zero(tmp_path):
         ("4 2 0 0\n1 0 0\n2 1 0\n3 0 1\n4 5 5\n3 0\n1 1 2\n2 2 3\n3 3 1\n",
          "vertex 4 at (5.0, 5.0) is on no segment of the domain and lies outside it"),
         ("4 2 0 0\n1 0 0\n2 1 0\n3 0 1\n4 1 1\n4 0\n1 1 2\n2 2 3\n3 3 1\n4 1 4\n",
-         "a vertex lies on a segment"),
+         "two segments cross"),
         ("3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n3 0\n1 1 2\n2 2 2\n3 3 1\n",
          "segment 2 joins vertex 2 at (1.0, 0.0) to itself"),
         ("3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n3 0\n1 1 2\n2 2 4\n3 3 1\n",
