@@ -28,7 +28,7 @@ import numpy as np
 from numba import njit
 
 from ._cavity import is_ghost
-from ._cdt import BOUNDARY, INTERIOR
+from ._cdt import INTERIOR
 from .errors import GeometryError
 from .predicates import orient2d, out_of_range, out_of_range_message
 from .triangulation import ghost_constrained

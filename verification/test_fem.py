@@ -11,7 +11,6 @@ from bubblemesh.interop import to_skfem
 
 skfem = pytest.importorskip("skfem")
 from skfem import Basis, ElementTriP1, FacetBasis, LinearForm, solve  # noqa: E402
-from skfem.helpers import dot  # noqa: E402
 from skfem.models.poisson import laplace  # noqa: E402
 
 DIRICHLET, NEUMANN, HOLE = 1, 2, 3
