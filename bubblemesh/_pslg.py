@@ -153,7 +153,7 @@ def _unique_segments(segments, markers, flags):
 
 
 def build(vertices, segments, markers, *, holes=(), regions=(), mode="enclosed",
-          flags=None, convex_hull=False, hull_marker=1) -> Graph:
+          flags=None, convex_hull=False, hull_marker=1, first_index=0) -> Graph:
     """The domain of a planar straight-line graph (module docstring).
 
     ``vertices`` (N, 2); ``segments`` (K, 2) vertex indices, either way;
@@ -166,7 +166,7 @@ def build(vertices, segments, markers, *, holes=(), regions=(), mode="enclosed",
     if len(P) < 3:
         raise GeometryError(f"a domain needs at least 3 vertices, got {len(P)}")
     holes = _checked_points(np.asarray(holes, np.float64).reshape(-1, 2), "hole point")
-    regions = np.asarray(regions, np.float64).reshape(-1, 4)
+    regions = np.asarray(() if regions is None else regions, np.float64).reshape(-1, 4)
     _checked_points(regions[:, :2], "region point")
     if flags is None:
         flags = np.full(len(np.asarray(segments).reshape(-1, 2)), INTERIOR, np.uint8)
@@ -188,7 +188,8 @@ def build(vertices, segments, markers, *, holes=(), regions=(), mode="enclosed",
     for h, (x, y) in enumerate(holes.tolist()):
         t, status = _locate(P, tri, con, ntri, x, y)
         if status == 0:
-            raise GeometryError(f"hole point {h} at ({x!r}, {y!r}) lies on a segment or vertex")
+            raise GeometryError(f"hole point {h + first_index} at ({x!r}, {y!r}) lies on a "
+                                "segment or vertex")
         if t >= 0:
             keep &= label != label[t]
     keep &= ~ghost

@@ -258,7 +258,7 @@ class Domain:
         from bubblemesh._pslg import build
 
         graph = build(vertices, segments, markers, holes=holes, regions=regions, mode=mode,
-                      flags=flags, convex_hull=convex_hull)
+                      flags=flags, convex_hull=convex_hull, first_index=first_index)
         if len(graph.dropped):  # Triangle would keep it as a node of no triangle
             v = int(graph.dropped[0])
             x, y = np.asarray(vertices, np.float64)[v].tolist()

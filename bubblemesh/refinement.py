@@ -94,7 +94,9 @@ class RefinedBoundary:
         if not interior.any() and len(source.points) == sum(len(ix) for ix in source.loops):
             try:
                 domain = Domain.from_loops(self.loops)
-            except GeometryError:  # islands in holes: only the planar-graph reading nests
+            except GeometryError as error:  # islands in holes: the planar-graph reading nests
+                if "nested holes" not in str(error):
+                    raise
                 return _graph_domain(self, source, marks, interior[origin])
             if source.segment_markers is None and not source.marker_names and (
                     source.regions is None):
@@ -139,7 +141,8 @@ def _graph_domain(refined: RefinedBoundary, source: Domain, marks, interior) -> 
     rank[order] = np.arange(len(order))
     S = rank[inverse.reshape(-1)][np.concatenate(pairs)]
     flags = np.where(interior, INTERIOR, BOUNDARY).astype(np.uint8)
-    return Domain._from_graph(unique[order], S, marks, (), source.regions,
+    regions = () if source.regions is None else source.regions
+    return Domain._from_graph(unique[order], S, marks, (), regions,
                               source.marker_names, mode="parity", flags=flags)
 
 

