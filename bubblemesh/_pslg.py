@@ -290,3 +290,30 @@ def _cycles(nxt, H, P):
     rank = sorted(range(len(cycles)), key=lambda i: (-areas[i], int(cycles[i][0])))
     cycles = [cycles[i] for i in rank]
     return [H[c, 0] for c in cycles], np.concatenate(cycles)
+
+
+@njit(cache=True)
+def triangle_values(P, T, values, Q, outside):
+    """values[t] of the triangle t holding each query point (closed, the first
+    found), ``outside`` where none does; triangles pre-filtered by their boxes."""
+    m = T.shape[0]
+    lo = np.empty((m, 2))
+    hi = np.empty((m, 2))
+    for t in range(m):
+        for d in range(2):
+            a, b, c = P[T[t, 0], d], P[T[t, 1], d], P[T[t, 2], d]
+            lo[t, d] = min(a, b, c)
+            hi[t, d] = max(a, b, c)
+    out = np.full(Q.shape[0], outside)
+    for k in range(Q.shape[0]):
+        x, y = Q[k, 0], Q[k, 1]
+        for t in range(m):
+            if x < lo[t, 0] or x > hi[t, 0] or y < lo[t, 1] or y > hi[t, 1]:
+                continue
+            u, v, w = T[t, 0], T[t, 1], T[t, 2]
+            if (orient2d(P[u, 0], P[u, 1], P[v, 0], P[v, 1], x, y) >= 0.0
+                    and orient2d(P[v, 0], P[v, 1], P[w, 0], P[w, 1], x, y) >= 0.0
+                    and orient2d(P[w, 0], P[w, 1], P[u, 0], P[u, 1], x, y) >= 0.0):
+                out[k] = values[t]
+                break
+    return out

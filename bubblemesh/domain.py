@@ -107,6 +107,34 @@ class Domain:
 
         return segment_flags(self.segments) == INTERIOR
 
+    def region_size(self, default: float | None = None):
+        """The regions' max_area as a size for ``bubblemesh.mesh(domain,
+        size=domain.region_size())``: a vectorised h(xy), the side of the
+        equilateral triangle of the max_area of the region holding each point
+        (a later region point wins, as in Triangle), ``default`` (the domain's
+        diameter) where no region with a max_area holds it."""
+        from bubblemesh._mesh import _flood
+        from bubblemesh._pslg import triangle_values
+        from bubblemesh.triangulation import constrained_delaunay
+
+        P = np.ascontiguousarray(self.points)
+        T, N = constrained_delaunay(P, self.segments)  # -1 across every constraint
+        region = np.full(len(T), -1, np.int64)
+        regions = np.zeros((0, 4)) if self.regions is None else np.asarray(self.regions)
+        for r, (x, y) in enumerate(regions[:, :2].tolist()):
+            _flood(P, T, N, float(x), float(y), r, region)
+        wide = float(np.hypot(*(P.max(axis=0) - P.min(axis=0)))) if default is None else float(
+            default)
+        area = np.where(region >= 0, regions[np.maximum(region, 0), 3] if len(regions) else -1,
+                        -1.0)
+        side = np.where(area > 0, np.sqrt(4.0 * np.abs(area) / math.sqrt(3.0)), wide)
+
+        def size(xy: np.ndarray) -> np.ndarray:
+            Q = np.ascontiguousarray(np.asarray(xy, np.float64).reshape(-1, 2))
+            return triangle_values(P, T, side, Q, wide)
+
+        return size
+
     def __repr__(self) -> str:
         return (
             f"Domain(nodes={len(self.points)}, holes={len(self.loops) - 1}, area={self.area:.6g})"
@@ -326,12 +354,18 @@ class Domain:
         )
 
     @classmethod
-    def from_shapely(cls, polygon, spacing: float | None = None) -> Domain:
-        """Build a Domain from a shapely ``Polygon`` (or a one-part ``MultiPolygon``).
+    def from_shapely(cls, polygon, spacing: float | None = None, *, constraints=(),
+                     points=(), names: Mapping[str, int] | None = None) -> Domain:
+        """Build a Domain from a shapely ``Polygon`` or ``MultiPolygon``.
 
         With ``spacing=None`` the ring vertices are the boundary nodes.  Otherwise
         each ring edge is split into ``ceil(length / spacing)`` equal pieces; the
-        ring vertices are kept, so corners stay sharp.
+        ring vertices are kept, so corners stay sharp.  ``constraints``
+        (LineStrings, LinearRings or a MultiLineString) become interior
+        constraints, ``points`` (Points, a MultiPoint or an (m, 2) array) free
+        nodes; with either, or several polygon parts, the domain is a planar
+        graph (:meth:`from_pslg`; ring k has marker k + 1, constraint j
+        marker n_rings + j + 1).
         """
         try:
             from shapely.geometry import MultiPolygon, Polygon
@@ -339,25 +373,57 @@ class Domain:
             raise ImportError(
                 "Domain.from_shapely needs shapely: pip install 'bubblemesh[shapely]'"
             ) from error
-        if isinstance(polygon, MultiPolygon):
-            parts = list(polygon.geoms)
-            if len(parts) != 1:
-                raise GeometryError(
-                    f"a MultiPolygon with {len(parts)} parts is not one domain; "
-                    "mesh each part separately"
-                )
-            polygon = parts[0]
-        if not isinstance(polygon, Polygon):
-            raise TypeError(f"expected a shapely Polygon, got {type(polygon).__name__}")
-        if polygon.is_empty:
+        parts = list(polygon.geoms) if isinstance(polygon, MultiPolygon) else [polygon]
+        for part in parts:
+            if not isinstance(part, Polygon):
+                raise TypeError(f"expected a shapely Polygon, got {type(part).__name__}")
+        if polygon.is_empty or not parts:
             raise GeometryError("the polygon is empty")
-        rings = [polygon.exterior, *polygon.interiors]
+        rings = [ring for part in parts for ring in (part.exterior, *part.interiors)]
         loops = [_open_ring(np.asarray(ring.coords, dtype=np.float64)[:, :2]) for ring in rings]
+        lines = [np.asarray(g.coords, dtype=np.float64)[:, :2] for g in _geoms(constraints)]
         if spacing is not None:
             if not (math.isfinite(spacing) and spacing > 0):
                 raise ValueError(f"spacing must be a positive finite number, got {spacing!r}")
             loops = [_split_edges(ring, spacing) for ring in loops]
-        return cls.from_loops(loops)
+            lines = [_split_polyline(line, spacing) for line in lines]
+        free = _point_array(points)
+        if len(parts) == 1 and not lines and not len(free) and not names:
+            return cls.from_loops(loops)  # as before: a polygon with holes
+        return cls.from_pslg(loops=loops, constraints=lines, points=free, names=names)
+
+
+def _geoms(geometry) -> list:
+    """The parts of a shapely geometry or of a sequence of them."""
+    if geometry is None:
+        return []
+    if hasattr(geometry, "geoms"):
+        return list(geometry.geoms)
+    if hasattr(geometry, "coords"):
+        return [geometry]
+    return [g for item in geometry for g in _geoms(item)]
+
+
+def _point_array(points) -> np.ndarray:
+    if hasattr(points, "geoms") or hasattr(points, "coords"):
+        return np.array([g.coords[0][:2] for g in _geoms(points)], np.float64).reshape(-1, 2)
+    items = list(points) if not isinstance(points, np.ndarray) else points
+    if len(items) and hasattr(items[0], "coords"):
+        return np.array([g.coords[0][:2] for g in items], np.float64).reshape(-1, 2)
+    return np.asarray(items, np.float64).reshape(-1, 2)
+
+
+def _split_polyline(line: np.ndarray, spacing: float) -> np.ndarray:
+    """A polyline with each edge split into ceil(length / spacing) equal pieces."""
+    if len(line) < 2:
+        return line
+    start, end = line[:-1], line[1:]
+    lengths = np.hypot(*(end - start).T)
+    pieces = np.maximum(1, np.ceil(lengths / spacing)).astype(np.int64)
+    edge = np.repeat(np.arange(len(start)), pieces)
+    first_piece = np.repeat(np.cumsum(pieces) - pieces, pieces)
+    t = (np.arange(pieces.sum()) - first_piece) / pieces[edge]
+    return np.vstack([start[edge] + (end[edge] - start[edge]) * t[:, None], line[-1:]])
 
 
 # --- input checks -------------------------------------------------------------------

@@ -158,7 +158,8 @@ def read_poly(path: str | Path) -> PolyFile:
     file beside it, as Triangle does.  Vertex and segment boundary markers are
     kept when the headers announce them, vertex attributes are skipped; the
     holes and the regional-attributes sections (x y attribute max_area; a
-    missing or negative max_area is none) may be left out.  Any problem raises
+    missing max_area is the attribute, as Triangle reads it, a negative one
+    none) may be left out.  Any problem raises
     :class:`PolyFormatError` naming file and line.
     """
     path = Path(path)
@@ -196,6 +197,8 @@ def _read_regions(lines: _Lines, first_index: int) -> np.ndarray:
         out[r, : len(values)] = values
         if len(values) < 3:
             out[r, 2] = 0.0
+        if len(values) < 4:  # as Triangle reads it: the area bound defaults to the attribute
+            out[r, 3] = out[r, 2]
     _check_range(lines, out[:, :2], [number] * n, "region", first_index)
     return out
 

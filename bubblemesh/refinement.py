@@ -95,7 +95,7 @@ class RefinedBoundary:
             try:
                 domain = Domain.from_loops(self.loops)
             except GeometryError as error:  # islands in holes: the planar-graph reading nests
-                if "nested holes" not in str(error):
+                if not any(why in str(error) for why in ("nested holes", "outside the outer")):
                     raise
                 return _graph_domain(self, source, marks, interior[origin])
             if source.segment_markers is None and not source.marker_names and (

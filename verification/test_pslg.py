@@ -272,3 +272,38 @@ def test_xdmf_facet_tags(tmp_path):
     assert [c.type for c in f.cells] == ["line"]
     assert set(f.cell_data["markers"][0].tolist()) == {7, 9}
     assert [c.type for c in meshio.read(cells).cells] == ["triangle"]
+
+
+# --- shapely input and regional sizes ------------------------------------------------
+
+
+def test_shapely_multipolygon_lines_and_points():
+    shapely = pytest.importorskip("shapely")
+    two = shapely.MultiPolygon([shapely.box(0, 0, 4, 4), shapely.box(6, 0, 10, 4)])
+    crack = shapely.LineString([(1, 1), (3, 3)])
+    d = bm.Domain.from_shapely(two, spacing=1.0, constraints=[crack],
+                               points=shapely.MultiPoint([(8, 2)]))
+    assert d.area == pytest.approx(two.area, rel=1e-15)
+    mesh = bm.mesh(d, size=0.8)
+    assert_valid(mesh, two.area)
+    assert_chain(mesh.points, mesh.triangles, (1, 1), (3, 3))
+    assert (8.0, 2.0) in {tuple(p) for p in mesh.points.tolist()}
+    # shapely's oracle: the union of the triangles is the MultiPolygon
+    cover = shapely.union_all([shapely.Polygon(mesh.points[t]) for t in mesh.triangles])
+    assert cover.symmetric_difference(two).area <= 1e-9 * two.area
+
+
+def test_region_max_area_bounds_the_mean_element_area():
+    left, right = (1.0, 4.0, 0.0, 0.02), (7.0, 4.0, 1.0, 0.5)
+    wall = np.array([(4, 0), (4, 8)], float)
+    square = np.array([(0, 0), (4, 0), (8, 0), (8, 8), (4, 8), (0, 8)], float)
+    d = bm.Domain.from_pslg(loops=[square], constraints=[wall], regions=[left, right])
+    mesh = bm.mesh(d, size=d.region_size())
+    P, T = mesh.points, mesh.triangles
+    area = np.array([float(orient(P[a], P[b], P[c])) / 2 for a, b, c in T.tolist()])
+    ids = mesh.region_ids()
+    c = P[T].mean(axis=1)
+    assert np.array_equal(ids, np.where(c[:, 0] < 4, 0, 1))  # the wall separates the regions
+    for r, (_, _, _, max_area) in enumerate((left, right)):
+        assert area[ids == r].mean() <= max_area
+    assert area[ids == 0].mean() < area[ids == 1].mean() / 3  # graded across the wall
