@@ -1,7 +1,12 @@
 """Constrained Delaunay triangulation from a Delaunay one (paper §2.1, §3.5):
 edge flips, segment recovery with Lawson restoration, removal of the outside
 and the holes by the parity of constrained edges crossed from infinity (in
-place of MATLAB's ``isInterior``), and compaction to the kept triangles."""
+place of MATLAB's ``isInterior``), and compaction to the kept triangles.
+
+``con`` flags: 0 free, ``BOUNDARY`` (1) a loop segment, counted by the parity,
+``INTERIOR`` (2) an interior constraint (interface, crack): kept as an edge,
+not counted, and cut in the compacted neighbours so every later walk and
+cavity stops at it as at the boundary."""
 
 import numpy as np
 from numba import njit
@@ -9,6 +14,9 @@ from numba import njit
 from ._cavity import is_ghost, orient, strictly_between
 from ._status import ERR_RECOVERY, ERR_SEGMENTS_CROSS, ERR_STACK, ERR_VERTEX_ON_SEGMENT, OK
 from .predicates import incircle
+
+BOUNDARY = 1
+INTERIOR = 2
 
 
 @njit(cache=True, inline="always")
@@ -197,7 +205,7 @@ def _crossed_edges(P, tri, nbr, con, vt, a, b, qu, qw, max_steps):
 
 
 @njit(cache=True)
-def recover_segment(P, tri, nbr, con, vt, a, b, qu, qw, stack_t, stack_i, max_steps):
+def recover_segment(P, tri, nbr, con, vt, a, b, qu, qw, stack_t, stack_i, max_steps, flag=1):
     """Make a-b an edge by flipping the edges it crosses (Sloan's queue), mark it
     constrained, then restore the constrained Delaunay property by Lawson flips
     around every triangle the recovery changed.  Returns (status, vertex)."""
@@ -246,26 +254,26 @@ def recover_segment(P, tri, nbr, con, vt, a, b, qu, qw, stack_t, stack_i, max_st
     t, i = _find_edge(tri, nbr, vt, a, b, max_steps)
     if t < 0:
         return ERR_RECOVERY, a
-    _set_constrained(tri, nbr, con, t, i)
+    _set_constrained(tri, nbr, con, t, i, flag)
     return _lawson(P, tri, nbr, con, vt, stack_t, stack_i, top, budget + 10 * max_steps), -1
 
 
 @njit(cache=True)
-def _set_constrained(tri, nbr, con, t, i):
-    con[t, i] = 1
+def _set_constrained(tri, nbr, con, t, i, flag):
+    con[t, i] = flag
     n = nbr[t, i]
     if n >= 0:
         u = tri[t, (i + 1) % 3]
         for m in range(3):
             if nbr[n, m] == t and tri[n, (m + 2) % 3] == u:
-                con[n, m] = 1
+                con[n, m] = flag
 
 
 @njit(cache=True)
-def recover_segments(P, tri, nbr, con, vt, ntri, segments, capacity):
-    """Recover every segment; returns (status, segment index, vertex).
-    ``capacity`` sizes the crossing queue and the flip stack (ERR_STACK if a
-    single recovery needs more)."""
+def recover_segments(P, tri, nbr, con, vt, ntri, segments, flags, capacity):
+    """Recover every segment, marking its edge ``flags[s]``; returns (status,
+    segment index, vertex).  ``capacity`` sizes the crossing queue and the flip
+    stack (ERR_STACK if a single recovery needs more)."""
     qu = np.empty(capacity, np.int64)
     qw = np.empty(capacity, np.int64)
     stack_t = np.empty(4 * capacity, np.int64)
@@ -275,9 +283,10 @@ def recover_segments(P, tri, nbr, con, vt, ntri, segments, capacity):
         b = segments[s, 1]
         t, i = _find_edge(tri, nbr, vt, a, b, ntri + 8)
         if t >= 0:
-            _set_constrained(tri, nbr, con, t, i)
+            _set_constrained(tri, nbr, con, t, i, flags[s])
             continue
-        status, v = recover_segment(P, tri, nbr, con, vt, a, b, qu, qw, stack_t, stack_i, ntri + 8)
+        status, v = recover_segment(P, tri, nbr, con, vt, a, b, qu, qw, stack_t, stack_i,
+                                    ntri + 8, flags[s])
         if status != OK:
             return status, s, v
     return OK, -1, -1
@@ -286,7 +295,9 @@ def recover_segments(P, tri, nbr, con, vt, ntri, segments, capacity):
 @njit(cache=True)
 def interior_mask(tri, nbr, con, ntri):
     """True for real triangles separated from infinity by an odd number of
-    constrained edges: inside the outer loop and outside every hole."""
+    boundary edges (``con == BOUNDARY``; interior constraints are crossed
+    freely): inside the outer loop and outside every hole, islands in holes
+    kept, to any depth."""
     depth = np.full(ntri, -1, np.int64)
     cur = np.empty(ntri, np.int64)
     nxt = np.empty(3 * ntri, np.int64)
@@ -307,7 +318,7 @@ def interior_mask(tri, nbr, con, ntri):
                 n = nbr[t, j]
                 if n < 0 or depth[n] != -1:
                     continue
-                if con[t, j]:
+                if con[t, j] == BOUNDARY:
                     nxt[nnext] = n
                     nnext += 1
                 else:
@@ -329,8 +340,9 @@ def interior_mask(tri, nbr, con, ntri):
 
 
 @njit(cache=True)
-def compact(tri, nbr, keep):
-    """Keep the flagged triangles; neighbours outside the kept set become -1."""
+def compact(tri, nbr, keep, con):
+    """Keep the flagged triangles; neighbours outside the kept set and across
+    interior constraints (``con == INTERIOR``) become -1."""
     ntri = keep.shape[0]
     new_id = np.full(ntri, -1, np.int64)
     m = 0
@@ -347,5 +359,5 @@ def compact(tri, nbr, keep):
         for j in range(3):
             out_tri[k, j] = tri[t, j]
             n = nbr[t, j]
-            out_nbr[k, j] = new_id[n] if n >= 0 else -1
+            out_nbr[k, j] = new_id[n] if n >= 0 and con[t, j] != INTERIOR else -1
     return out_tri, out_nbr

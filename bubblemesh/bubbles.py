@@ -22,14 +22,21 @@ BOUNDARY_FACTOR = math.sqrt(3.0) / (8.0 * math.pi)  # eq. 2
 
 def boundary_radii(points: np.ndarray, loops: Sequence[np.ndarray]) -> np.ndarray:
     """Eq. 1-2 for every boundary node: l1, l2 are the lengths of the loop's
-    segments arriving at and leaving the node.  Returns (N,) float64, in the
-    order of ``points``."""
+    segments arriving at and leaving the node.  A node on no segment (a free
+    point of a planar graph) takes l1 = l2 = the distance to its nearest other
+    node.  Returns (N,) float64, in the order of ``points``."""
     radii = np.zeros(len(points))
     for loop in loops:
         ring = points[loop]
         leaving = np.linalg.norm(np.roll(ring, -1, axis=0) - ring, axis=1)
         arriving = np.roll(leaving, 1)
         radii[loop] = np.sqrt(BOUNDARY_FACTOR * (arriving**2 + leaving**2))
+    free = np.flatnonzero(radii == 0.0)
+    if len(free) and len(points) > 1:
+        from scipy.spatial import cKDTree
+
+        nearest, _ = cKDTree(points).query(points[free], k=2)
+        radii[free] = np.sqrt(2.0 * BOUNDARY_FACTOR) * nearest[:, 1]
     return radii
 
 

@@ -7,6 +7,8 @@ as published: Delaunay generation with node and element bubbles (§2) and the
 physically-based optimisation (§3); ``--no-optimize`` and ``--max-insertions``
 are paper-stage options and imply ``--paper``.  It reports the radius ratio
 of eq. 10.
+It also reports the boundary markers it wrote.  ``bubblemesh info`` prints the
+counts, regions, markers and radius-ratio summary of any mesh file.
 ``bubblemesh reproduce`` rebuilds the paper's Figs. 3-6 and the comparison
 with other meshers, ``bubblemesh study`` runs any study definition (both on
 dask), ``bubblemesh bench`` times them; they live in ``bubblemesh.studies``,
@@ -202,6 +204,9 @@ def _parser() -> argparse.ArgumentParser:
     bench.add_argument("--quick", action="store_true", help="a short run (smoke test)")
     bench.add_argument("--out", type=Path, default=Path("reports"), help="report folder")
     bench.set_defaults(run=_run_bench)
+    info = command("info", "counts, regions, markers and quality of any mesh file")
+    info.add_argument("input", type=Path, metavar="MESHFILE", help="any meshio triangle mesh")
+    info.set_defaults(run=_run_info)
     from bubblemesh.verify.check import CHECK_DESCRIPTION, add_check_arguments
 
     check = command("check", "check any mesh file exactly (exit 1 when something is wrong)")
@@ -272,10 +277,43 @@ def _run_mesh(args: argparse.Namespace) -> int:
     print(f"nodes: {len(mesh.points)} ({mesh.n_boundary} on the boundary)")
     print(f"elements: {len(mesh.triangles)}")
     print(_summary_line(summary(mesh.points, mesh.triangles)))
+    print(_markers_line(mesh))
     print(f"wrote {args.output}")
     if args.plot is not None:
         _plot(mesh.points, mesh.triangles, args.plot)
         print(f"wrote {args.plot}")
+    return 0
+
+
+def _markers_line(mesh) -> str:
+    """The markers written: edges per marker, with names."""
+    import numpy as np
+
+    _, marks = mesh.boundary_edges()
+    names = {marker: name for name, marker in mesh.marker_names.items()}
+    values, counts = np.unique(marks, return_counts=True)
+    parts = [f"{int(v)}{f' ({names[int(v)]})' if int(v) in names else ''}: {int(c)} edges"
+             for v, c in zip(values, counts)]
+    return "markers: " + (", ".join(parts) if parts else "none")
+
+
+def _run_info(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from bubblemesh._mesh import read
+    from bubblemesh.quality import summary
+
+    try:
+        mesh = read(args.input)
+    except (OSError, ValueError) as error:
+        raise UsageError(f"cannot read the input: {error}") from None
+    print(f"nodes: {len(mesh.points)} ({mesh.n_boundary} on the boundary)")
+    print(f"elements: {len(mesh.triangles)}")
+    regions, counts = np.unique(mesh.region_ids(), return_counts=True)
+    print("regions: " + ", ".join(f"{int(r) + 1}: {int(c)} triangles"
+                                  for r, c in zip(regions, counts)))
+    print(_markers_line(mesh))
+    print(_summary_line(summary(mesh.points, mesh.triangles)))
     return 0
 
 

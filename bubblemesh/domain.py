@@ -20,10 +20,11 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 from decimal import Decimal
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 import numpy.typing as npt
@@ -57,6 +58,21 @@ class Domain:
         One point strictly inside each hole, ``H = len(loops) - 1``.
     area : float
         ``A_geo`` of eq. 6: outer area minus the hole areas.
+    segment_markers : (N,) int64 or None
+        The marker of each segment's input segment (a ``.poly`` file's, the
+        user's); None means the default, the loop number plus one (``markers``).
+    marker_names : mapping of str to int
+        Names of markers (e.g. ``{"inlet": 3}``); written as physical names.
+    regions : (R, 4) float64 or None
+        Region points (x, y, attribute, max_area; max_area <= 0 for none), as
+        Triangle's regional attributes.
+
+    A domain from :meth:`from_pslg` or a ``.poly`` file may also hold interior
+    constraints (each such segment appears both ways in ``segments``, the
+    domain lying on both sides) and free points (on no segment); ``loops`` are
+    then the closed walks around the boundary and the constraints, a node
+    repeating where constraints meet.  Every node of ``points`` is fixed.
+
 
     Build one with :meth:`from_loops`, :meth:`from_poly` or
     :meth:`from_shapely`; these validate the geometry and raise
@@ -69,6 +85,55 @@ class Domain:
     loops: tuple[np.ndarray, ...]
     hole_points: np.ndarray
     area: float
+    segment_markers: np.ndarray | None = None
+    marker_names: Mapping[str, int] = field(default_factory=lambda: MappingProxyType({}))
+    regions: np.ndarray | None = None
+
+    @property
+    def markers(self) -> np.ndarray:
+        """(len(segments),) int64: each segment's marker (the loop number plus
+        one unless the input gave markers)."""
+        if self.segment_markers is not None:
+            return self.segment_markers
+        return _read_only(np.concatenate(
+            [np.full(len(ix), k + 1, np.int64) for k, ix in enumerate(self.loops)]))
+
+    @property
+    def interior(self) -> np.ndarray:
+        """(len(segments),) bool: the segment is an interior constraint (its
+        reverse is a segment too)."""
+        from bubblemesh._cdt import INTERIOR
+        from bubblemesh.triangulation import segment_flags
+
+        return segment_flags(self.segments) == INTERIOR
+
+    def region_size(self, default: float | None = None):
+        """The regions' max_area as a size for ``bubblemesh.mesh(domain,
+        size=domain.region_size())``: a vectorised h(xy), the side of the
+        equilateral triangle of the max_area of the region holding each point
+        (a later region point wins, as in Triangle), ``default`` (the domain's
+        diameter) where no region with a max_area holds it."""
+        from bubblemesh._mesh import _flood
+        from bubblemesh._pslg import triangle_values
+        from bubblemesh.triangulation import constrained_delaunay
+
+        P = np.ascontiguousarray(self.points)
+        T, N = constrained_delaunay(P, self.segments)  # -1 across every constraint
+        region = np.full(len(T), -1, np.int64)
+        regions = np.zeros((0, 4)) if self.regions is None else np.asarray(self.regions)
+        for r, (x, y) in enumerate(regions[:, :2].tolist()):
+            _flood(P, T, N, float(x), float(y), r, region)
+        wide = float(np.hypot(*(P.max(axis=0) - P.min(axis=0)))) if default is None else float(
+            default)
+        area = np.where(region >= 0, regions[np.maximum(region, 0), 3] if len(regions) else -1,
+                        -1.0)
+        side = np.where(area > 0, np.sqrt(4.0 * np.abs(area) / math.sqrt(3.0)), wide)
+
+        def size(xy: np.ndarray) -> np.ndarray:
+            Q = np.ascontiguousarray(np.asarray(xy, np.float64).reshape(-1, 2))
+            return triangle_values(P, T, side, Q, wide)
+
+        return size
 
     def __repr__(self) -> str:
         return (
@@ -117,8 +182,133 @@ class Domain:
         )
 
     @classmethod
-    def from_poly(cls, path: str | Path) -> Domain:
-        """Read a Triangle ``.poly`` file (vertices, segments, holes).
+    def from_poly(cls, path: str | Path, *, convex_hull: bool | None = None,
+                  names: Mapping[str, int] | None = None) -> Domain:
+        """Read a Triangle ``.poly`` file as Triangle's ``-p`` reads it.
+
+        The domain is every face the segments enclose (reached from outside
+        only across a segment) minus the faces of the hole points; segments
+        inside it are interior constraints, vertices on no segment free
+        points, vertices outside it left out.  ``convex_hull=True`` closes the
+        convex hull with segments first (``-c``, marker 1); the default
+        (None) does so only when the segments enclose nothing.  Segment
+        markers (a boundary segment marked 0 gets 1, as in Triangle), the
+        regional attributes and ``names`` (marker names) are kept.
+        """
+        from bubblemesh.io import read_poly
+
+        poly = read_poly(path)
+        if convex_hull is None:  # closed loops only: as before, markers and regions kept
+            try:
+                domain = cls._from_loop_poly(path, poly)
+                return replace(domain, marker_names=MappingProxyType(_checked_names(names)))
+            except GeometryError as error:
+                if not any(why in str(error) for why in _NOT_LOOPS):
+                    raise
+        markers = (np.zeros(len(poly.segments), np.int64) if poly.segment_markers is None
+                   else poly.segment_markers)
+        hull = [convex_hull] if convex_hull is not None else [False, True]
+        for closed in hull:
+            try:
+                return cls._from_graph(poly.vertices, poly.segments, markers, poly.holes,
+                                       poly.regions, names, mode="enclosed",
+                                       convex_hull=closed, boundary_zero=1,
+                                       first_index=poly.first_index)
+            except GeometryError as error:
+                if closed or convex_hull is not None or "no domain" not in str(error):
+                    raise GeometryError(f"{path}: {error}") from None
+        raise AssertionError("unreachable")
+
+    @classmethod
+    def from_pslg(cls, loops: Sequence[npt.ArrayLike] = (),
+                  constraints: Sequence[npt.ArrayLike] = (), points: npt.ArrayLike = (), *,
+                  markers: Sequence[int] | None = None,
+                  names: Mapping[str, int] | None = None, holes: npt.ArrayLike = (),
+                  regions: npt.ArrayLike = ()) -> Domain:
+        """A planar straight-line graph domain.
+
+        ``loops``: closed rings (either orientation); a point is in the domain
+        when an odd number of loops surround it, so outer loops, holes and
+        islands in holes nest to any depth.  ``constraints``: polylines
+        inside the domain (open, or closed when the last node repeats the
+        first): material interfaces, cracks; their nodes may be loop nodes.
+        ``points``: free interior nodes.  ``markers``: one int per loop then
+        per constraint (default: their position plus one); ``names`` maps
+        names to markers; ``holes`` are extra hole points (each removes its
+        face); ``regions`` rows (x, y, attribute, max_area).  Coincident nodes
+        are merged exactly.  GeometryError for crossing segments, nodes on
+        segments and the like, naming the items.
+        """
+        from bubblemesh._cdt import BOUNDARY, INTERIOR
+
+        items = [(np.asarray(r, np.float64).reshape(-1, 2), True) for r in loops]
+        items += [(np.asarray(c, np.float64).reshape(-1, 2), False) for c in constraints]
+        if markers is not None and len(markers) != len(items):
+            raise ValueError(f"markers: {len(markers)} given for {len(items)} loops and "
+                             "constraints")
+        coords, segs, marks, flags = [], [], [], []
+        base = 0
+        for k, (line, is_loop) in enumerate(items):
+            closed = is_loop or (len(line) > 2 and (line[0] == line[-1]).all())
+            line = _open_ring(line) if closed else line
+            need = 3 if is_loop else 2
+            if len(line) < need:
+                raise GeometryError(f"{'loop' if is_loop else 'constraint'} {k} has "
+                                    f"{len(line)} nodes; it needs at least {need}")
+            ix = base + np.arange(len(line))
+            pairs = np.column_stack([ix, np.roll(ix, -1)]) if closed else np.column_stack(
+                [ix[:-1], ix[1:]])
+            coords.append(line)
+            segs.append(pairs)
+            marks.append(np.full(len(pairs), k + 1 if markers is None else int(markers[k])))
+            flags.append(np.full(len(pairs), BOUNDARY if is_loop else INTERIOR, np.uint8))
+            base += len(line)
+        free = np.asarray(points, np.float64).reshape(-1, 2)
+        coords.append(free)
+        vertices = np.concatenate(coords) if coords else np.zeros((0, 2))
+        if not len(vertices) or not np.isfinite(vertices).all():
+            raise GeometryError("from_pslg: no nodes, or a non-finite coordinate")
+        unique, first, inverse = np.unique(vertices, axis=0, return_index=True,
+                                           return_inverse=True)
+        rank = np.argsort(np.argsort(first))  # unique rows in order of first occurrence
+        vertices = unique[np.argsort(first)]
+        remap = rank[inverse.reshape(-1)]
+        S = remap[np.concatenate(segs)] if segs else np.zeros((0, 2), np.int64)
+        if not len(S):
+            raise GeometryError("from_pslg: give at least one loop")
+        return cls._from_graph(vertices, S, np.concatenate(marks), holes, regions, names,
+                               mode="parity", flags=np.concatenate(flags))
+
+    @classmethod
+    def _from_graph(cls, vertices, segments, markers, holes, regions, names, *, mode,
+                    flags=None, convex_hull=False, boundary_zero=None,
+                    first_index=0) -> Domain:
+        from bubblemesh._pslg import build
+
+        graph = build(vertices, segments, markers, holes=holes, regions=regions, mode=mode,
+                      flags=flags, convex_hull=convex_hull, first_index=first_index)
+        if len(graph.dropped):  # Triangle would keep it as a node of no triangle
+            v = int(graph.dropped[0])
+            x, y = np.asarray(vertices, np.float64)[v].tolist()
+            raise GeometryError(f"vertex {v + first_index} at ({x!r}, {y!r}) is on no segment "
+                                "of the domain and lies outside it (or in a hole)")
+        marks = np.array(graph.markers, np.int64)
+        if boundary_zero is not None:  # Triangle: a boundary segment marked 0 gets 1
+            from bubblemesh._cdt import BOUNDARY
+            from bubblemesh.triangulation import segment_flags
+
+            marks[(marks == 0) & (segment_flags(graph.segments) == BOUNDARY)] = boundary_zero
+        return cls(points=_read_only(graph.points),
+                   segments=_read_only(np.asarray(graph.segments, np.int64)),
+                   loops=tuple(_read_only(np.asarray(ix, np.int64)) for ix in graph.loops),
+                   hole_points=_read_only(np.asarray(graph.holes, np.float64)),
+                   area=graph.area, segment_markers=_read_only(marks),
+                   marker_names=MappingProxyType(_checked_names(names)),
+                   regions=_read_only(np.asarray(graph.regions, np.float64).reshape(-1, 4)))
+
+    @classmethod
+    def _from_loop_poly(cls, path: str | Path, poly) -> Domain:
+        """A ``.poly`` file whose segments are closed loops (vertices, segments, holes).
 
         The segments must chain into closed loops; every vertex must lie on
         exactly two segments.  The loop of largest area is the outer one.
@@ -126,9 +316,6 @@ class Domain:
         other loop must contain one (internal constraint loops are not
         supported).
         """
-        from bubblemesh.io import read_poly
-
-        poly = read_poly(path)
         chains = _chain_segments(poly.segments, poly.vertices, poly.first_index)
         offsets = np.cumsum([0] + [len(chain) for chain in chains])
         areas = _loop_areas(poly.vertices[np.concatenate(chains)], offsets)
@@ -144,7 +331,7 @@ class Domain:
             raise GeometryError(f"{path}: {error} ({starts})") from None
         if len(poly.holes):
             _check_hole_markers(domain, poly.holes, chains, poly.first_index, path)
-        return domain
+        return _with_file_markers(domain, chains, poly)
 
     def to_poly(self, path: str | Path) -> None:
         """Write the domain as a Triangle ``.poly`` file with a holes section.
@@ -167,12 +354,18 @@ class Domain:
         )
 
     @classmethod
-    def from_shapely(cls, polygon, spacing: float | None = None) -> Domain:
-        """Build a Domain from a shapely ``Polygon`` (or a one-part ``MultiPolygon``).
+    def from_shapely(cls, polygon, spacing: float | None = None, *, constraints=(),
+                     points=(), names: Mapping[str, int] | None = None) -> Domain:
+        """Build a Domain from a shapely ``Polygon`` or ``MultiPolygon``.
 
         With ``spacing=None`` the ring vertices are the boundary nodes.  Otherwise
         each ring edge is split into ``ceil(length / spacing)`` equal pieces; the
-        ring vertices are kept, so corners stay sharp.
+        ring vertices are kept, so corners stay sharp.  ``constraints``
+        (LineStrings, LinearRings or a MultiLineString) become interior
+        constraints, ``points`` (Points, a MultiPoint or an (m, 2) array) free
+        nodes; with either, or several polygon parts, the domain is a planar
+        graph (:meth:`from_pslg`; ring k has marker k + 1, constraint j
+        marker n_rings + j + 1).
         """
         try:
             from shapely.geometry import MultiPolygon, Polygon
@@ -180,28 +373,94 @@ class Domain:
             raise ImportError(
                 "Domain.from_shapely needs shapely: pip install 'bubblemesh[shapely]'"
             ) from error
-        if isinstance(polygon, MultiPolygon):
-            parts = list(polygon.geoms)
-            if len(parts) != 1:
-                raise GeometryError(
-                    f"a MultiPolygon with {len(parts)} parts is not one domain; "
-                    "mesh each part separately"
-                )
-            polygon = parts[0]
-        if not isinstance(polygon, Polygon):
-            raise TypeError(f"expected a shapely Polygon, got {type(polygon).__name__}")
-        if polygon.is_empty:
+        parts = list(polygon.geoms) if isinstance(polygon, MultiPolygon) else [polygon]
+        for part in parts:
+            if not isinstance(part, Polygon):
+                raise TypeError(f"expected a shapely Polygon, got {type(part).__name__}")
+        if polygon.is_empty or not parts:
             raise GeometryError("the polygon is empty")
-        rings = [polygon.exterior, *polygon.interiors]
+        rings = [ring for part in parts for ring in (part.exterior, *part.interiors)]
         loops = [_open_ring(np.asarray(ring.coords, dtype=np.float64)[:, :2]) for ring in rings]
+        lines = [np.asarray(g.coords, dtype=np.float64)[:, :2] for g in _geoms(constraints)]
         if spacing is not None:
             if not (math.isfinite(spacing) and spacing > 0):
                 raise ValueError(f"spacing must be a positive finite number, got {spacing!r}")
             loops = [_split_edges(ring, spacing) for ring in loops]
-        return cls.from_loops(loops)
+            lines = [_split_polyline(line, spacing) for line in lines]
+        free = _point_array(points)
+        if len(parts) == 1 and not lines and not len(free) and not names:
+            return cls.from_loops(loops)  # as before: a polygon with holes
+        return cls.from_pslg(loops=loops, constraints=lines, points=free, names=names)
+
+
+def _geoms(geometry) -> list:
+    """The parts of a shapely geometry or of a sequence of them."""
+    if geometry is None:
+        return []
+    if hasattr(geometry, "geoms"):
+        return list(geometry.geoms)
+    if hasattr(geometry, "coords"):
+        return [geometry]
+    return [g for item in geometry for g in _geoms(item)]
+
+
+def _point_array(points) -> np.ndarray:
+    if hasattr(points, "geoms") or hasattr(points, "coords"):
+        return np.array([g.coords[0][:2] for g in _geoms(points)], np.float64).reshape(-1, 2)
+    items = list(points) if not isinstance(points, np.ndarray) else points
+    if len(items) and hasattr(items[0], "coords"):
+        return np.array([g.coords[0][:2] for g in items], np.float64).reshape(-1, 2)
+    return np.asarray(items, np.float64).reshape(-1, 2)
+
+
+def _split_polyline(line: np.ndarray, spacing: float) -> np.ndarray:
+    """A polyline with each edge split into ceil(length / spacing) equal pieces."""
+    if len(line) < 2:
+        return line
+    start, end = line[:-1], line[1:]
+    lengths = np.hypot(*(end - start).T)
+    pieces = np.maximum(1, np.ceil(lengths / spacing)).astype(np.int64)
+    edge = np.repeat(np.arange(len(start)), pieces)
+    first_piece = np.repeat(np.cumsum(pieces) - pieces, pieces)
+    t = (np.arange(pieces.sum()) - first_piece) / pieces[edge]
+    return np.vstack([start[edge] + (end[edge] - start[edge]) * t[:, None], line[-1:]])
 
 
 # --- input checks -------------------------------------------------------------------
+
+# what the closed-loop reading of a .poly file refuses and the planar-graph reading takes
+_NOT_LOOPS = ("free vertices", "must form closed loops", "nested holes",
+              "internal constraint loops", "hole point")
+
+
+def _with_file_markers(domain: Domain, chains: list[np.ndarray], poly) -> Domain:
+    """The file's segment markers (0 on a boundary segment becomes 1, as in
+    Triangle) and regions on a domain read as closed loops."""
+    regions = None if poly.regions is None else _read_only(np.asarray(poly.regions))
+    if poly.segment_markers is None:
+        return replace(domain, regions=regions)
+    vertex = np.concatenate(chains)  # domain node -> file vertex
+    n = len(poly.vertices)
+    ends = np.sort(poly.segments, axis=1)
+    keys = ends[:, 0] * n + ends[:, 1]
+    order = np.argsort(keys)
+    mine = np.sort(vertex[domain.segments], axis=1)
+    at = order[np.searchsorted(keys[order], mine[:, 0] * n + mine[:, 1])]
+    marks = np.array(poly.segment_markers[at], np.int64)
+    marks[marks == 0] = 1
+    return replace(domain, segment_markers=_read_only(marks), regions=regions)
+
+
+def _checked_names(names) -> dict[str, int]:
+    out = {}
+    for name, marker in dict(names or {}).items():
+        if not isinstance(name, str) or isinstance(marker, bool) or not isinstance(
+                marker, (int, np.integer)):
+            raise TypeError(f"names must map str to int markers, got {name!r}: {marker!r}")
+        out[name] = int(marker)
+    return out
+
+
 
 
 def _loop_name(k: int) -> str:

@@ -54,6 +54,9 @@ class PolyFile(NamedTuple):
     segments: np.ndarray  # (K, 2) int64
     holes: np.ndarray  # (H, 2) float64
     first_index: int  # 0 or 1: how the file numbers its vertices
+    segment_markers: np.ndarray | None = None  # (K,) int64 when the file gives them
+    regions: np.ndarray | None = None  # (R, 4) x, y, attribute, max_area (-1: none)
+    vertex_markers: np.ndarray | None = None  # (N,) int64 when the file gives them
 
 
 # Numbers as C's strtol/strtod write them (what Triangle reads), nothing else:
@@ -152,9 +155,12 @@ def read_poly(path: str | Path) -> PolyFile:
 
     Vertices are numbered from 0 or 1, as the first vertex says, and must be
     consecutive.  A vertex count of 0 reads the vertices from the ``.node``
-    file beside it, as Triangle does.  Attributes, boundary markers and the
-    optional regional-attributes section are ignored; the holes section may be
-    left out.  Any problem raises :class:`PolyFormatError` naming file and line.
+    file beside it, as Triangle does.  Vertex and segment boundary markers are
+    kept when the headers announce them, vertex attributes are skipped; the
+    holes and the regional-attributes sections (x y attribute max_area; a
+    missing max_area is the attribute, as Triangle reads it, a negative one
+    none) may be left out.  Any problem raises
+    :class:`PolyFormatError` naming file and line.
     """
     path = Path(path)
     lines = _Lines.read(path)
@@ -162,11 +168,11 @@ def read_poly(path: str | Path) -> PolyFile:
     if _check_header(lines, tokens, number) == 0:
         node = path.with_suffix(".node")
         why = f"{path} line {number}: 0 vertices, so they come from {node}, but "
-        vertices, first_index = _read_vertices(_Lines.read(node, why))
+        vertices, first_index, vertex_markers = _read_vertices(_Lines.read(node, why))
     else:
         lines._next -= 1  # the header belongs to the vertex section
-        vertices, first_index = _read_vertices(lines)
-    segments = _read_segments(lines, len(vertices), first_index)
+        vertices, first_index, vertex_markers = _read_vertices(lines)
+    segments, segment_markers = _read_segments(lines, len(vertices), first_index)
     holes = np.empty((0, 2))
     if not lines.at_end():
         number, tokens = lines.take("the hole header", 1)
@@ -174,7 +180,27 @@ def read_poly(path: str | Path) -> PolyFile:
         rows = [_read_point(lines, f"hole {h + first_index}") for h in range(n_holes)]
         holes = np.array([point for _, point in rows], dtype=np.float64).reshape(n_holes, 2)
         _check_range(lines, holes, [number for number, _ in rows], "hole", first_index)
-    return PolyFile(vertices, segments, holes, first_index)
+    regions = _read_regions(lines, first_index) if not lines.at_end() else np.empty((0, 4))
+    return PolyFile(vertices, segments, holes, first_index, segment_markers, regions,
+                    vertex_markers)
+
+
+def _read_regions(lines: _Lines, first_index: int) -> np.ndarray:
+    """The optional regional attributes: (x, y, attribute, max_area) per region."""
+    number, tokens = lines.take("the region header", 1)
+    n = lines.count(tokens[0], "regions", number, "a region")
+    out = np.full((n, 4), -1.0)
+    for r in range(n):
+        what = f"region {r + first_index}"
+        number, tokens = lines.take(what, 3)
+        values = [lines.real(token, what, number) for token in tokens[1:5]]
+        out[r, : len(values)] = values
+        if len(values) < 3:
+            out[r, 2] = 0.0
+        if len(values) < 4:  # as Triangle reads it: the area bound defaults to the attribute
+            out[r, 3] = out[r, 2]
+    _check_range(lines, out[:, :2], [number] * n, "region", first_index)
+    return out
 
 
 def _check_header(lines: _Lines, tokens: list[str], number: int) -> int:
@@ -185,13 +211,17 @@ def _check_header(lines: _Lines, tokens: list[str], number: int) -> int:
     return header[0]
 
 
-def _read_vertices(lines: _Lines) -> tuple[np.ndarray, int]:
+def _read_vertices(lines: _Lines) -> tuple[np.ndarray, int, np.ndarray | None]:
     number, tokens = lines.take("the vertex header", 1)
     _check_header(lines, tokens, number)
+    header = [lines.integer(token, "the vertex header", number) for token in tokens]
+    n_attributes = header[2] if len(header) > 2 else 0
+    with_markers = len(header) > 3 and header[3] != 0
     n_vertices = lines.count(tokens[0], "vertices", number, "a vertex")
     if n_vertices == 0:
         raise lines.fail(number, "no vertices")
     vertices = np.empty((n_vertices, 2))
+    markers = np.zeros(n_vertices, dtype=np.int64)
     line_of = np.empty(n_vertices, dtype=np.int64)
     first_index = 0
     for v in range(n_vertices):
@@ -209,8 +239,10 @@ def _read_vertices(lines: _Lines) -> tuple[np.ndarray, int]:
                 "vertices must be numbered consecutively",
             )
         vertices[v] = [lines.real(token, "a vertex", number) for token in tokens[1:3]]
+        if with_markers and len(tokens) > 3 + n_attributes:
+            markers[v] = lines.integer(tokens[3 + n_attributes], "a vertex marker", number)
     _check_range(lines, vertices, line_of, "vertex", first_index)
-    return vertices, first_index
+    return vertices, first_index, markers if with_markers else None
 
 
 def _check_range(lines: _Lines, points: np.ndarray, line_of, what: str, first_index: int) -> None:
@@ -224,10 +256,13 @@ def _check_range(lines: _Lines, points: np.ndarray, line_of, what: str, first_in
         raise lines.fail(int(line_of[k]), f"{what} {k + first_index} = {message}")
 
 
-def _read_segments(lines: _Lines, n_vertices: int, first_index: int) -> np.ndarray:
+def _read_segments(lines: _Lines, n_vertices: int, first_index: int
+                   ) -> tuple[np.ndarray, np.ndarray | None]:
     number, tokens = lines.take("the segment header", 1)
     n_segments = lines.count(tokens[0], "segments", number, "a segment")
+    with_markers = len(tokens) > 1 and lines.integer(tokens[1], "the segment header", number) != 0
     segments = np.empty((n_segments, 2), dtype=np.int64)
+    markers = np.zeros(n_segments, dtype=np.int64)
     for s in range(n_segments):
         name = f"segment {s + first_index}"
         number, tokens = lines.take(name, 3)
@@ -240,7 +275,9 @@ def _read_segments(lines: _Lines, n_vertices: int, first_index: int) -> np.ndarr
                     f"({n_vertices} vertices numbered from {first_index})",
                 )
         segments[s] = ends
-    return segments
+        if with_markers and len(tokens) > 3:
+            markers[s] = lines.integer(tokens[3], f"{name}'s marker", number)
+    return segments, markers if with_markers else None
 
 
 def _read_point(lines: _Lines, what: str) -> tuple[int, list[float]]:
@@ -390,9 +427,20 @@ def write_mesh(
     point_data: dict[str, np.ndarray] | None = None,
     cell_data: dict[str, np.ndarray] | None = None,
     file_format: str | None = None,
+    lines: tuple[np.ndarray, np.ndarray] | None = None,
+    regions: np.ndarray | None = None,
+    names: dict[str, int] | None = None,
     **meshio_kwargs: Any,
 ) -> None:
     """Write a triangle mesh with meshio; the format follows the file suffix.
+
+    ``lines`` = (edges (E, 2), markers (E,)) adds the boundary and interface
+    edges as a second block of line cells, tagged with their markers (Gmsh
+    physical and geometrical tags, cell data ``marker``; 0 for the triangle
+    data on lines), ``regions`` the triangles' tags (default 1) and ``names``
+    the marker names as physical names.  XDMF keeps the triangles only (one
+    cell type per file, as dolfinx reads it; ``bubblemesh.interop.write_xdmf``
+    writes the facets beside it).
 
     ``.msh`` is written as binary Gmsh 2.2 (the most widely read version) and
     XDMF with its data inline as XML (one file, no ``.h5`` beside it); pass
@@ -411,16 +459,30 @@ def write_mesh(
     triangles = np.asarray(triangles, dtype=np.int64)
     points3 = np.column_stack([points, np.zeros(len(points))])
     cells = {name: [np.asarray(values)] for name, values in (cell_data or {}).items()}
+    blocks = [("triangle", triangles)]
+    tags = np.ones(len(triangles), np.int32) if regions is None else np.asarray(regions, np.int32)
     if file_format == "gmsh22":
-        # Gmsh elements carry physical and geometrical tags; tag every triangle 1.
-        ones = np.ones(len(triangles), dtype=np.int32)
-        cells.setdefault("gmsh:physical", [ones])
-        cells.setdefault("gmsh:geometrical", [ones])
+        # Gmsh elements carry physical and geometrical tags (triangles: their region)
+        cells.setdefault("gmsh:physical", [tags])
+        cells.setdefault("gmsh:geometrical", [tags])
+    field_data = {}
+    if lines is not None and len(lines[0]) and file_format != "xdmf":
+        edges, marks = np.asarray(lines[0], np.int64), np.asarray(lines[1], np.int32)
+        blocks.append(("line", edges))
+        if file_format == "gmsh22":  # meshio's Gmsh 2.2 reader splits other element data wrongly
+            cells = {name: v for name, v in cells.items() if name.startswith("gmsh:")}
+        for name, values in cells.items():
+            values.append(marks if name.startswith("gmsh:") else
+                          np.zeros(len(edges), values[0].dtype))
+        if file_format != "gmsh22":
+            cells["marker"] = [tags, marks]
+        field_data = {name: np.array([marker, 1]) for name, marker in (names or {}).items()}
     mesh = meshio.Mesh(
         points3,
-        [("triangle", triangles)],
+        blocks,
         point_data={name: np.asarray(v) for name, v in (point_data or {}).items()},
         cell_data=cells,
+        field_data=field_data,
     )
     # (Gmsh stays binary: meshio's ASCII writer prints numpy 2 scalars as "np.float64(...)")
     options = {"data_format": "XML"} if file_format == "xdmf" else {}

@@ -30,12 +30,13 @@ whose length the size field h does not allow:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numba import njit, prange
 
 from bubblemesh.domain import Domain
+from bubblemesh.errors import GeometryError
 from bubblemesh.predicates import orient2d
 from bubblemesh.sizing import MAX_SOURCES, SizeField, as_size_function
 
@@ -69,10 +70,40 @@ class RefinedBoundary:
     input_index: tuple[np.ndarray, ...]
     on_segment: tuple[np.ndarray, ...]
     max_deviation: float
+    source: Domain | None = None
+
+    def segment_sources(self) -> np.ndarray:
+        """Per refined segment (loop after loop): the index of the input segment
+        (of ``source.segments``) it lies on."""
+        out, first = [], 0
+        for loop, index in zip(self.loops, self.input_index):
+            out.append(first + np.searchsorted(index, np.arange(len(loop)), side="right") - 1)
+            first += len(index)
+        return np.concatenate(out) if out else np.zeros(0, np.int64)
 
     def to_domain(self) -> Domain:
-        """Validate the refined loops as a Domain (GeometryError if they conflict)."""
-        return Domain.from_loops(self.loops)
+        """Validate the refined loops as a Domain (GeometryError if they conflict);
+        refined segments keep their input segment's marker, and a planar-graph
+        source keeps its interior constraints, free points and regions."""
+        source = self.source
+        if source is None:
+            return Domain.from_loops(self.loops)
+        origin = self.segment_sources()
+        marks = np.asarray(source.markers)[origin]
+        interior = np.asarray(source.interior)
+        if not interior.any() and len(source.points) == sum(len(ix) for ix in source.loops):
+            try:
+                domain = Domain.from_loops(self.loops)
+            except GeometryError as error:  # islands in holes: the planar-graph reading nests
+                if not any(why in str(error) for why in ("nested holes", "outside the outer")):
+                    raise
+                return _graph_domain(self, source, marks, interior[origin])
+            if source.segment_markers is None and not source.marker_names and (
+                    source.regions is None):
+                return domain
+            return replace(domain, segment_markers=_frozen(marks),
+                           marker_names=source.marker_names, regions=source.regions)
+        return _graph_domain(self, source, marks, interior[origin])
 
     def exact_only(self) -> RefinedBoundary:
         """The same refinement without the nodes that are not exactly on their
@@ -81,7 +112,38 @@ class RefinedBoundary:
         keep = self.on_segment
         index = tuple(np.cumsum(k)[i] - 1 for k, i in zip(keep, self.input_index))
         return RefinedBoundary(tuple(loop[k] for loop, k in zip(self.loops, keep)), index,
-                               tuple(k[k] for k in keep), 0.0)
+                               tuple(k[k] for k in keep), 0.0, self.source)
+
+
+def _frozen(array: np.ndarray) -> np.ndarray:
+    array = np.ascontiguousarray(array)
+    array.setflags(write=False)
+    return array
+
+
+def _graph_domain(refined: RefinedBoundary, source: Domain, marks, interior) -> Domain:
+    """The refined walks, the source's free points and regions, as a planar-graph
+    domain (loop segments counted by parity, interior ones not)."""
+    from bubblemesh._cdt import BOUNDARY, INTERIOR
+
+    on_loops = np.zeros(len(source.points), bool)
+    on_loops[np.concatenate(source.loops)] = True
+    free = np.asarray(source.points)[~on_loops]
+    vertices = np.concatenate([*refined.loops, free])
+    pairs, first = [], 0
+    for loop in refined.loops:
+        ix = first + np.arange(len(loop))
+        pairs.append(np.column_stack([ix, np.roll(ix, -1)]))
+        first += len(loop)
+    unique, where, inverse = np.unique(vertices, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(where, kind="stable")
+    rank = np.empty(len(order), np.int64)
+    rank[order] = np.arange(len(order))
+    S = rank[inverse.reshape(-1)][np.concatenate(pairs)]
+    flags = np.where(interior, INTERIOR, BOUNDARY).astype(np.uint8)
+    regions = () if source.regions is None else source.regions
+    return Domain._from_graph(unique[order], S, marks, (), regions,
+                              source.marker_names, mode="parity", flags=flags)
 
 
 def refine_boundary(
@@ -100,11 +162,46 @@ def refine_boundary(
         raise ValueError(f"resolution must be in (0, 1], got {resolution!r}")
     a = np.concatenate(rings)
     b = np.concatenate([np.roll(ring, -1, axis=0) for ring in rings])
-    length = np.hypot(*(b - a).T)
-    seg, t, values = _samples(a, b, length, size, resolution, max_nodes)
-    t_new, ptr = _split_parameters(seg, t, values, length, len(a), max_nodes)
-    points, status, offset = _place(a, b, t_new, ptr)
-    return _assemble(rings, a, points, status, offset, ptr)
+    source = domain_or_loops if isinstance(domain_or_loops, Domain) else None
+    canon, flip = _canonical(source)
+    ca, cb = (a, b) if canon is None else (a[canon], b[canon])
+    length = np.hypot(*(cb - ca).T)
+    seg, t, values = _samples(ca, cb, length, size, resolution, max_nodes)
+    t_new, ptr = _split_parameters(seg, t, values, length, len(ca), max_nodes)
+    points, status, offset = _place(ca, cb, t_new, ptr)
+    if canon is not None:  # both sides of an interior constraint get the same nodes
+        points, status, offset, ptr = _expand(points, status, offset, ptr, canon, flip)
+    out = _assemble(rings, a, points, status, offset, ptr)
+    return replace(out, source=source)
+
+
+def _canonical(domain: Domain | None):
+    """For a domain with interior constraints (segments present both ways): the
+    first segment of each pair of twins, and whether each segment runs against
+    it; (None, None) when every segment is its own."""
+    if domain is None or not np.asarray(domain.interior).any():
+        return None, None
+    S = np.asarray(domain.segments)
+    key = np.sort(S, axis=1)
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    canon_of = first[inverse]  # the segment refined for each one
+    keep = np.sort(first)
+    slot = np.searchsorted(keep, canon_of)
+    flip = S[:, 0] != S[canon_of, 0]
+    return keep, (slot, flip)
+
+
+def _expand(points, status, offset, ptr, canon, slot_flip):
+    """The refined nodes of every segment from its canonical twin's (reversed
+    when it runs the other way)."""
+    slot, flip = slot_flip
+    counts = ptr[slot + 1] - ptr[slot]
+    new_ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    pos = np.arange(new_ptr[-1]) - np.repeat(new_ptr[:-1], counts)
+    reverse = np.repeat(flip, counts)
+    src = np.repeat(ptr[slot], counts) + np.where(reverse, np.repeat(counts, counts) - 1 - pos, pos)
+    return points[src], status[src], offset[src], new_ptr
 
 
 def _input_rings(domain_or_loops) -> list[np.ndarray]:

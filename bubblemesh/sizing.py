@@ -207,7 +207,10 @@ def _feature_distance(q, excluded, ids, a, b, start, end, left, box):
                 if left[i] < 0:
                     for k in range(start[i], end[i]):
                         s = ids[k]
-                        if s == excluded[j, 0] or s == excluded[j, 1] or s == excluded[j, 2]:
+                        skip = False
+                        for c in range(excluded.shape[1]):
+                            skip = skip or s == excluded[j, c]
+                        if skip:
                             continue
                         d = _point_segment_distance(x, y, a[k, 0], a[k, 1], b[k, 0], b[k, 1])
                         best = min(best, d)
@@ -237,6 +240,8 @@ class _Boundary:
             self.prev[span] = np.roll(span, 1)
             self.next[span] = np.roll(span, -1)
             first += len(loop)
+        self.ends = np.asarray(domain.segments, np.int64)
+        self.incident = _incident(self.ends, len(domain.points))
         self.tree = _Tree(np.minimum(self.a, self.b), np.maximum(self.a, self.b), self.length)
         self.ids = ids[self.tree.order]
         self.a_sorted = np.ascontiguousarray(self.a[self.tree.order])
@@ -251,8 +256,25 @@ class _Boundary:
         return np.maximum(distance, self.floor)
 
     def along(self, segment: np.ndarray) -> np.ndarray:
-        """Exclusion rows for points inside segments: the segment and its two neighbours."""
-        return np.column_stack([segment, self.prev[segment], self.next[segment]])
+        """Exclusion rows for points inside segments: the segment, its two
+        neighbours and every segment meeting it at an end (junctions and the
+        other side of an interior constraint, in planar-graph domains)."""
+        return np.column_stack([segment, self.prev[segment], self.next[segment],
+                                self.incident[self.ends[segment, 0]],
+                                self.incident[self.ends[segment, 1]]])
+
+
+def _incident(ends: np.ndarray, n: int) -> np.ndarray:
+    """(n, D) the segments at each node, padded with -1."""
+    node = ends.ravel()
+    seg = np.repeat(np.arange(len(ends), dtype=np.int64), 2)
+    order = np.argsort(node, kind="stable")
+    node, seg = node[order], seg[order]
+    count = np.bincount(node, minlength=n)
+    out = np.full((n, max(int(count.max(initial=0)), 1)), -1, np.int64)
+    rank = np.arange(len(node)) - np.concatenate([[0], np.cumsum(count)])[node]
+    out[node, rank] = seg
+    return out
 
 
 # --- user size ---------------------------------------------------------------------------
@@ -412,12 +434,20 @@ def _gradation(g) -> float:
 
 def _node_sources(domain, boundary, user, cap):
     """Every boundary node with min((a) spacing, (b) feature size, (c) user size)."""
-    seg_from = np.empty(len(domain.points), np.int64)
+    seg_from = np.full(len(domain.points), -1, np.int64)
     seg_from[domain.segments[:, 0]] = np.arange(len(domain.segments))
+    free = seg_from < 0  # a free point of a planar graph: on no segment
+    seg_from[free] = 0
     leaving = boundary.length[seg_from]
     arriving = boundary.length[boundary.prev[seg_from]]
     spacing = np.sqrt(0.5 * (arriving**2 + leaving**2))  # eq. 1 area as an equilateral side
-    excluded = np.column_stack([seg_from, boundary.prev[seg_from], seg_from])
+    if free.any():
+        from scipy.spatial import cKDTree
+
+        spacing[free] = cKDTree(domain.points).query(domain.points[free], k=2)[0][:, 1]
+    excluded = np.column_stack([seg_from, boundary.prev[seg_from], seg_from,
+                                boundary.incident])
+    excluded[free, :3] = -1
     values = np.minimum(spacing, boundary.feature_size(domain.points, excluded))
     if user is not None:
         values = np.minimum(values, user(domain.points))

@@ -11,7 +11,7 @@ statuses into exceptions.
 import numpy as np
 from numpy.typing import ArrayLike, DTypeLike
 
-from ._cdt import compact, interior_mask, recover_segments
+from ._cdt import BOUNDARY, INTERIOR, compact, interior_mask, recover_segments
 from ._delaunay import delaunay_kernel
 from ._ordering import hilbert_order
 from ._status import ERR_SEGMENTS_CROSS, ERR_STACK, ERR_VERTEX_ON_SEGMENT, OK, raise_for
@@ -89,10 +89,25 @@ def constrained_delaunay(points: ArrayLike, segments: ArrayLike
     (paper §2.1 and §3.5): triangles outside the outer loop and inside holes are
     removed by the parity of segments crossed from infinity.
 
+    A segment given in both directions, (a, b) and (b, a), is an interior
+    constraint (a material interface, a crack): an edge of the result with the
+    domain on both sides, not counted by the parity, and -1 in the neighbours
+    across it, so every walk and cavity stops there as at the boundary.
+
     Returns (triangles (M,3) int64 CCW, neighbors (M,3) int64, -1 across the
-    domain boundary)."""
+    domain boundary and the interior constraints)."""
     P = _as_points(points)
     S = _writable(segments, np.int64).reshape(-1, 2)
+    tri, nbr, con, ntri = ghost_constrained(P, S, segment_flags(S))
+    keep = interior_mask(tri, nbr, con, ntri)
+    return compact(tri[:ntri], nbr[:ntri], keep, con[:ntri])
+
+
+def ghost_constrained(P: np.ndarray, S: np.ndarray, flags: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """The constrained triangulation with ghosts, before any removal: (tri, nbr,
+    con, ntri), segment s's edge flagged ``flags[s]``; GeometryError naming
+    the segments at fault."""
     if S.size and (S.min() < 0 or S.max() >= P.shape[0]):
         raise GeometryError("a segment refers to a point index out of range")
     # Stacks for a few thousand crossed edges per segment; a recovery that needs
@@ -104,7 +119,7 @@ def constrained_delaunay(points: ArrayLike, segments: ArrayLike
         if dups.size:
             k = int(dups[0])
             raise GeometryError(f"point {k} duplicates point {int(dup_of[k])}")
-        status, s, v = recover_segments(P, tri, nbr, con, vt, ntri, S, capacity)
+        status, s, v = recover_segments(P, tri, nbr, con, vt, ntri, S, flags, capacity)
         if status != ERR_STACK or capacity >= 4 * len(P) + 64:
             break
         capacity *= 4
@@ -117,5 +132,15 @@ def constrained_delaunay(points: ArrayLike, segments: ArrayLike
         else:
             where += ")"
         raise_for(status, "constrained delaunay", where)
-    keep = interior_mask(tri, nbr, con, ntri)
-    return compact(tri[:ntri], nbr[:ntri], keep)
+    return tri, nbr, con, ntri
+
+
+def segment_flags(segments: np.ndarray) -> np.ndarray:
+    """Per segment: INTERIOR if its reverse is also a segment, else BOUNDARY."""
+    S = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
+    flags = np.full(len(S), BOUNDARY, np.uint8)
+    if len(S):
+        n = int(S.max()) + 1
+        forward = S[:, 0] * n + S[:, 1]
+        flags[np.isin(forward, S[:, 1] * n + S[:, 0])] = INTERIOR
+    return flags
