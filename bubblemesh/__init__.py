@@ -14,6 +14,7 @@ from ._mesh import GenerationStats, Mesh, OptimizationStats, read
 from .domain import Domain
 from .errors import GeometryError, MeshingError
 from .generation import generate
+from .interop import to_pyvista, to_skfem, write_xdmf
 from .optimization import optimize
 from .pipeline import QualityWarning
 from .quality import radius_ratio
@@ -34,6 +35,9 @@ __all__ = [
     "optimize",
     "radius_ratio",
     "read",
+    "to_pyvista",
+    "to_skfem",
+    "write_xdmf",
 ]
 
 try:

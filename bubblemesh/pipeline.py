@@ -111,24 +111,28 @@ class RobustOptimizationStats(OptimizationStats):
 
 
 def corner_angles(domain: Domain) -> np.ndarray:
-    """Interior angle (radians, in (0, 2 pi)) at every node of ``domain``, in
-    the order of ``domain.points`` (the domain lies left of its segments)."""
+    """Interior angle (radians, in (0, 2 pi]) at every node of ``domain``, in
+    the order of ``domain.points`` (the domain lies left of its segments).  A
+    node a walk passes more than once gets its smallest wedge; the tip of a
+    crack (the walk turns back) and a free point get 2 pi: no corner there."""
     P = np.asarray(domain.points)
-    angles = np.empty(len(P))
+    angles = np.full(len(P), 2 * np.pi)
     for ix in domain.loops:
         v = P[ix]
         to_prev = np.roll(v, 1, axis=0) - v
         to_next = np.roll(v, -1, axis=0) - v
         cross = to_next[:, 0] * to_prev[:, 1] - to_next[:, 1] * to_prev[:, 0]
         dot = (to_next * to_prev).sum(axis=1)
-        angles[ix] = np.mod(np.arctan2(cross, dot), 2 * np.pi)
+        wedge = np.mod(np.arctan2(cross, dot), 2 * np.pi)
+        wedge[wedge == 0.0] = 2 * np.pi  # turned back along the same segment
+        np.minimum.at(angles, np.asarray(ix), wedge)
     return angles
 
 
 def _sharp_corner_warnings(domain: Domain) -> tuple[str, ...]:
     out = []
     theta = corner_angles(domain)
-    node_loop = np.empty(len(theta), np.int64)
+    node_loop = np.full(len(theta), -1, np.int64)
     for k, ix in enumerate(domain.loops):
         node_loop[ix] = k
     for i in np.flatnonzero(theta < SHARP_ANGLE):

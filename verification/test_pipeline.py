@@ -253,3 +253,21 @@ def test_far_from_the_origin_no_two_nodes_meet(seed):
         mesh = bm.mesh(domain)
     assert fuzz.check_against_input(mesh, domain) == ""
     assert len(np.unique(mesh.points, axis=0)) == len(mesh.points)
+
+
+def test_crack_tips_and_free_points_are_not_sharp_corners():
+    """A crack's tip (the walk turns back) and a free point have no corner:
+    angle 2 pi, so no QualityWarning names them."""
+    from bubblemesh.pipeline import corner_angles
+
+    square = [(0.0, 0.0), (2.0, 0.0), (2.0, 2.0), (0.0, 2.0)]
+    d = bm.Domain.from_pslg(loops=[square], constraints=[[(0.5, 1.0), (1.5, 1.0)]],
+                            points=[(0.5, 0.5)])
+    theta = corner_angles(d)
+    corners = [i for i, p in enumerate(d.points.tolist()) if tuple(p) in set(square)]
+    others = [i for i in range(len(d.points)) if i not in corners]
+    np.testing.assert_allclose(theta[corners], np.pi / 2)
+    assert (theta[others] >= np.pi - 1e-12).all(), theta[others]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", bm.QualityWarning)
+        bm.mesh(d)
