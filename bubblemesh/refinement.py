@@ -36,7 +36,7 @@ import numpy as np
 from numba import njit, prange
 
 from bubblemesh.domain import Domain
-from bubblemesh.errors import GeometryError
+from bubblemesh.errors import GeometryError, MeshingError
 from bubblemesh.predicates import orient2d
 from bubblemesh.sizing import MAX_SOURCES, SizeField, as_size_function
 
@@ -229,7 +229,7 @@ def _samples(a, b, length, size, resolution, max_nodes):
         tm = 0.5 * (t0 + t1)
         total += len(tm)
         if total > max_nodes:
-            raise ValueError(
+            raise MeshingError(
                 f"refining the boundary needs more than {max_nodes} samples: h is too "
                 "small for this boundary"
             )
@@ -257,7 +257,8 @@ def _split_parameters(seg, t, values, length, n_seg, max_nodes):
     integral = cumulative[last] - cumulative[first]
     pieces = np.maximum(1, np.ceil(integral * (1 - 1e-12))).astype(np.int64)
     if pieces.sum() > max_nodes:
-        raise ValueError(f"refining the boundary would create more than {max_nodes} nodes")
+        raise MeshingError(f"refining the boundary would create more than {max_nodes} nodes: "
+                           "the sizes are far finer than the boundary")
     ptr = np.concatenate([[0], np.cumsum(pieces - 1)]).astype(np.int64)
     owner = np.repeat(np.arange(n_seg), pieces - 1)
     k = np.arange(ptr[-1]) - ptr[owner] + 1

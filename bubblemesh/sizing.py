@@ -40,14 +40,15 @@ import numpy as np
 from numba import njit, prange
 
 from bubblemesh.domain import Domain
+from bubblemesh.errors import MeshingError
 
 __all__ = ["SizeField", "as_size_function", "cone_at", "STACK_SIZE"]
 
 SAMPLING = 0.5  # boundary samples are spaced <= SAMPLING * h
 FEATURE_SLACK = 1.25  # on the boundary h <= FEATURE_SLACK * feature size
-# gaps thinner than this fraction of the shortest input segment are not resolved
-# (two segments a few ulps apart would otherwise ask for sizes of 0)
-FEATURE_FLOOR = 1e-3
+# gaps thinner than this fraction of the local input segment length are not
+# resolved (a node an ulp from a segment would otherwise ask for sizes of ~0)
+FEATURE_FLOOR = 1e-2
 QUADTREE_SAMPLING = 1.0  # quadtree cells have sides <= QUADTREE_SAMPLING * user size
 MAX_SOURCES = 2**24  # beyond this the requested sizes are unreasonably small
 _LEAF = 8  # items per tree leaf
@@ -231,7 +232,6 @@ class _Boundary:
         self.a = np.ascontiguousarray(domain.points[domain.segments[:, 0]])
         self.b = np.ascontiguousarray(domain.points[domain.segments[:, 1]])
         self.length = np.hypot(*(self.b - self.a).T)
-        self.floor = FEATURE_FLOOR * float(self.length.min())
         ids = np.arange(len(self.a), dtype=np.int64)
         self.prev, self.next = ids.copy(), ids.copy()
         first = 0
@@ -248,12 +248,17 @@ class _Boundary:
         self.b_sorted = np.ascontiguousarray(self.b[self.tree.order])
 
     def feature_size(self, xy: np.ndarray, excluded: np.ndarray) -> np.ndarray:
-        """(b): distance from each point to the segments not in its row of ``excluded``."""
+        """(b): distance from each point to the segments not in its row of
+        ``excluded``, at least FEATURE_FLOOR times its own segments' length
+        (the first two entries of the row)."""
         t = self.tree
         distance = _feature_distance(
             xy, excluded, self.ids, self.a_sorted, self.b_sorted, t.start, t.end, t.left, t.box
         )
-        return np.maximum(distance, self.floor)
+        first, second = excluded[:, 0], excluded[:, 1]
+        own = np.minimum(self.length[first], self.length[second])
+        own[(first < 0) | (second < 0)] = 0.0  # a free point: on no segment
+        return np.maximum(distance, FEATURE_FLOOR * own)
 
     def along(self, segment: np.ndarray) -> np.ndarray:
         """Exclusion rows for points inside segments: the segment, its two
@@ -484,7 +489,7 @@ def _segment_sources(boundary, nodes, user, max_sources):
         tm = 0.5 * (t0 + t1)
         total += len(tm)
         if total > max_sources:
-            raise ValueError(
+            raise MeshingError(
                 f"the size field needs more than {max_sources} boundary samples: the sizes "
                 "(user size or feature size) are too small for this domain"
             )
@@ -526,7 +531,7 @@ def _quadtree_sources(domain, field, user, room):
     for _ in range(60):
         total += len(centres)
         if total > room:
-            raise ValueError(
+            raise MeshingError(
                 f"the size field needs more than {room} more samples: the user size "
                 "is too small for this domain"
             )

@@ -271,3 +271,31 @@ def test_crack_tips_and_free_points_are_not_sharp_corners():
     with warnings.catch_warnings():
         warnings.simplefilter("error", bm.QualityWarning)
         bm.mesh(d)
+
+
+@pytest.mark.parametrize("seed", [755, 6859])
+def test_near_degenerate_inputs_give_a_mesh_or_a_meshing_error(seed):
+    """Fuzz cases: a hole node an ulp from a non-adjacent segment asked for
+    sizes of 1e-10 and §2 ran for minutes (755); a mutated .poly asked for more
+    than 16M boundary nodes and leaked a plain ValueError (6859)."""
+    import tempfile
+
+    import fuzz
+
+    case = fuzz.make_case(seed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", bm.QualityWarning)
+        if case["kind"] == "poly":
+            with tempfile.TemporaryDirectory() as tmp:
+                path = f"{tmp}/case.poly"
+                with open(path, "w") as f:
+                    f.write(case["poly"])
+                domain = bm.Domain.from_poly(path)
+        else:
+            domain = bm.Domain.from_loops([np.array(loop) for loop in case["loops"]])
+        try:
+            mesh = bm.mesh(domain)
+        except bm.MeshingError as error:
+            assert "more than" in str(error)
+            return
+    assert fuzz.check_against_input(mesh, domain) == ""

@@ -175,7 +175,7 @@ def test_bad_arguments():
         refine_boundary(tri, lambda xy: np.full(len(xy), np.nan))
     with pytest.raises(ValueError, match="resolution"):
         refine_boundary(tri, 0.1, resolution=0.0)
-    with pytest.raises(ValueError, match="more than 100"):
+    with pytest.raises(bm.MeshingError, match="more than 100"):
         refine_boundary(tri, 1e-3, max_nodes=100)
     with pytest.raises(GeometryError, match="crosses"):
         refine_boundary([np.array([(0, 0), (1, 1), (1, 0), (0, 1)], float)], 0.1)

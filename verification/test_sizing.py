@@ -213,5 +213,5 @@ def test_bad_user_sizes_and_gradations():
         SizeField.from_domain(domain, gradation=-0.1)
     with pytest.raises(TypeError, match="expected a Domain"):
         SizeField.from_domain([np.zeros((3, 2))])
-    with pytest.raises(ValueError, match="boundary samples"):
+    with pytest.raises(bm.MeshingError, match="boundary samples"):
         SizeField.from_domain(domain, size=lambda xy: np.full(len(xy), 1e-9), max_sources=1000)
