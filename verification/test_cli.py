@@ -244,6 +244,7 @@ def fake_studies_module(monkeypatch, name: str, returns=None) -> list:
 
 
 def test_reproduce_passes_its_options(monkeypatch, tmp_path):
+    pytest.importorskip("matplotlib")  # reproduce checks for it before it starts
     calls = fake_studies_module(monkeypatch, "reproduce")
     argv = ["reproduce", "--case", "fig3", "--case", "fig5", "--out", str(tmp_path),
             "--scheduler", "inline"]
