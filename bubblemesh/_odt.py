@@ -15,7 +15,7 @@ deterministic.
 import numpy as np
 from numba import njit
 
-from ._smoothing import rho
+from ._smoothing import rho, shortest_edge
 from .predicates import orient2d
 
 STEPS = (1.0, 0.5, 0.25)
@@ -124,13 +124,7 @@ def mean_polish(X, triangles, ptr, idx, n_boundary, sweeps, movable, floor, halv
             if mean >= below:
                 continue
             need = max(min(worst, floor), 0.0)
-            shortest = np.inf
-            for e in range(ptr[i], ptr[i + 1]):
-                for k in range(3):
-                    v = triangles[idx[e], k]
-                    if v != i:
-                        shortest = min(shortest, np.hypot(X[v, 0] - X[i, 0], X[v, 1] - X[i, 1]))
-            step = 0.1 * shortest
+            step = 0.1 * shortest_edge(X, triangles, ptr, idx, i)
             for _ in range(halvings):
                 for d in range(COMPASS):
                     px = X[i, 0] + step * DX[d]

@@ -122,6 +122,18 @@ def guarded_smooth(X, triangles, ptr, idx, n_boundary, sweeps, movable):
 
 
 @njit(cache=True)
+def shortest_edge(X, triangles, ptr, idx, i):
+    """The shortest edge at node i of its star (the step scale of a search)."""
+    shortest = np.inf
+    for e in range(ptr[i], ptr[i + 1]):
+        for k in range(3):
+            v = triangles[idx[e], k]
+            if v != i:
+                shortest = min(shortest, math.hypot(X[v, 0] - X[i, 0], X[v, 1] - X[i, 1]))
+    return shortest
+
+
+@njit(cache=True)
 def compass_polish(X, triangles, ptr, idx, n_boundary, poor, movable):
     """Compass search on the interior nodes with ``movable`` set whose star's
     smallest ratio is below ``poor`` (module docstring); X in place.  Returns
@@ -133,13 +145,7 @@ def compass_polish(X, triangles, ptr, idx, n_boundary, poor, movable):
         best = _star_quality(X, triangles, ptr, idx, i, X[i, 0], X[i, 1])
         if best >= poor:
             continue
-        shortest = np.inf
-        for e in range(ptr[i], ptr[i + 1]):
-            for k in range(3):
-                v = triangles[idx[e], k]
-                if v != i:
-                    shortest = min(shortest, math.hypot(X[v, 0] - X[i, 0], X[v, 1] - X[i, 1]))
-        step = 0.1 * shortest
+        step = 0.1 * shortest_edge(X, triangles, ptr, idx, i)
         for _ in range(COMPASS_HALVINGS):
             improved = True
             while improved:

@@ -26,6 +26,7 @@ bound raises MeshingError instead of looping.
 import math
 import numbers
 import os
+from typing import Any
 
 import numpy as np
 
@@ -88,14 +89,18 @@ def generate(domain, *, max_insertions=None, progress=False):
     ``bubble_area`` (sum A_e), ``domain_area`` (A_geo) and ``stop`` ("population"
     or "max_insertions") and ``phases`` (seconds in boundary_cdt, setup,
     insertion, renumbering)."""
+    _check_arguments("generate", domain, max_insertions)
+    return _generate(domain, max_insertions, progress, None)
+
+
+def _check_arguments(name: str, domain: Any, max_insertions: Any) -> None:
     if not isinstance(domain, Domain):
-        raise TypeError(f"generate: domain must be a bubblemesh.Domain, got "
+        raise TypeError(f"{name}: domain must be a bubblemesh.Domain, got "
                         f"{type(domain).__name__}")
     if max_insertions is not None and not (
-            isinstance(max_insertions, numbers.Integral) and max_insertions >= 0):
-        raise ValueError(f"generate: max_insertions must be an integer >= 0 or None, "
+            isinstance(max_insertions, numbers.Integral) and int(max_insertions) >= 0):
+        raise ValueError(f"{name}: max_insertions must be an integer >= 0 or None, "
                          f"got {max_insertions!r}")
-    return _generate(domain, max_insertions, progress, None)
 
 
 def generate_sized(domain, size_field, *, max_insertions=None, progress=False):
@@ -105,16 +110,10 @@ def generate_sized(domain, size_field, *, max_insertions=None, progress=False):
     the finer of the two.  ``size_field`` is a :class:`bubblemesh.sizing.SizeField`."""
     from .sizing import SizeField
 
-    if not isinstance(domain, Domain):
-        raise TypeError(f"generate_sized: domain must be a bubblemesh.Domain, got "
-                        f"{type(domain).__name__}")
+    _check_arguments("generate_sized", domain, max_insertions)
     if not isinstance(size_field, SizeField):
         raise TypeError(f"generate_sized: size_field must be a SizeField, got "
                         f"{type(size_field).__name__}")
-    if max_insertions is not None and not (
-            isinstance(max_insertions, numbers.Integral) and max_insertions >= 0):
-        raise ValueError(f"generate_sized: max_insertions must be an integer >= 0 or None, "
-                         f"got {max_insertions!r}")
     return _generate(domain, max_insertions, progress, size_field)
 
 
