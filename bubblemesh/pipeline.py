@@ -201,7 +201,11 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterati
     except GeometryError:  # a node an ulp off its segment touches a part a few ulps away
         fine = refined.exact_only().to_domain()
     clock.lap("sizing")
-    generated = generate_sized(fine, field, progress=progress)
+    try:
+        generated = generate_sized(fine, field, progress=progress)
+    except MemoryError:  # sizes far finer than the domain's extent
+        raise MeshingError("mesh: not enough memory for the mesh this size field asks for "
+                           "(sizes far finer than the domain)") from None
     notes = _sharp_corner_warnings(domain)
     for note in notes:
         warnings.warn(note, QualityWarning, stacklevel=3)
@@ -212,11 +216,15 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterati
         size_range=(float(field.values.min()), float(field.values.max())))
     generated = replace(generated, generation=gen)
     clock.lap("generation")
-    return stable_optimize(generated, max_iterations=int(max_iterations), tol=float(tol),
-                           amplification=float(amplification), alpha=float(alpha),
-                           rings=int(rings), smoothing_rounds=int(smoothing_rounds),
-                           smoothing_sweeps=int(smoothing_sweeps), size_field=field,
-                           clock=clock)
+    try:
+        return stable_optimize(generated, max_iterations=int(max_iterations), tol=float(tol),
+                               amplification=float(amplification), alpha=float(alpha),
+                               rings=int(rings), smoothing_rounds=int(smoothing_rounds),
+                               smoothing_sweeps=int(smoothing_sweeps), size_field=field,
+                               clock=clock)
+    except MemoryError:  # sizes far finer than the domain's extent
+        raise MeshingError("mesh: not enough memory to optimise the mesh this size field "
+                           "asks for (sizes far finer than the domain)") from None
 
 
 def _forces(mesh, R, max_iterations, tol, alpha, rings):

@@ -102,8 +102,36 @@ def check_against_input(mesh, domain) -> str:
     the oracles propagates."""
     import oracles as O
 
-    O.check_valid(mesh.points, mesh.triangles, mesh.neighbors)
-    O.check_conforming(mesh.points, mesh.triangles, mesh.domain.segments, rel=1e-9)
+    # across an interior constraint the mesh has no neighbour (-1, by design):
+    # there the neighbours are checked against that rule instead
+    interior = mesh.domain.interior
+    O.check_valid(mesh.points, mesh.triangles, None if interior.any() else mesh.neighbors)
+    if interior.any():
+        t, i = np.nonzero(mesh.neighbors < 0)
+        tri = mesh.triangles
+        edges = {frozenset(e) for e in np.column_stack([tri[t, (i + 1) % 3],
+                                                        tri[t, (i + 2) % 3]]).tolist()}
+        allowed = {frozenset(e) for e in mesh.domain.segments.tolist()}
+        if not edges <= allowed:
+            return "a triangle has no neighbour across an edge that is no segment"
+        mesh_edges = {frozenset(e) for e in np.concatenate(
+            [tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]).tolist()}
+        inner = {frozenset(e) for e in mesh.domain.segments[interior].tolist()}
+        if not inner <= mesh_edges:
+            return "an interior constraint is not an edge of the mesh"
+    boundary_segments = mesh.domain.segments[~interior]
+    if np.bincount(boundary_segments.ravel()).max() <= 2:
+        O.check_conforming(mesh.points, mesh.triangles, boundary_segments, rel=1e-9)
+    else:  # loops touching at a node: the oracle takes closed simple loops only
+        tri = mesh.triangles
+        t, i = np.nonzero(mesh.neighbors < 0)
+        edges = {frozenset(e) for e in np.column_stack([tri[t, (i + 1) % 3],
+                                                        tri[t, (i + 2) % 3]]).tolist()}
+        if not edges <= {frozenset(e) for e in mesh.domain.segments.tolist()}:
+            return "a boundary edge of the mesh is no segment"
+        area = float(np.abs(O.triangle_areas(mesh.points, tri)).sum())
+        if abs(area - mesh.domain.area) > 1e-9 * mesh.domain.area:
+            return f"the triangles cover {area!r}, the domain {mesh.domain.area!r}"
     # a refined boundary node can sit within an ulp of its input segment (no
     # float point lies on it exactly): the enclosed area moves by at most that
     # much times the perimeter
