@@ -27,7 +27,7 @@ def to_skfem(mesh) -> tuple[Any, dict[str, np.ndarray]]:
     each marker as indices into ``MeshTri.facets`` (ready for
     ``basis.get_dofs(facets)`` and ``FacetBasis(m, e, facets=...)``)."""
     try:
-        import skfem  # type: ignore[import-untyped]
+        import skfem
     except ImportError as error:
         raise ImportError("to_skfem needs scikit-fem: pip install scikit-fem") from error
     m = skfem.MeshTri(np.ascontiguousarray(mesh.points.T, dtype=np.float64),
@@ -70,7 +70,7 @@ def to_pyvista(mesh) -> Any:
     """A ``pyvista.UnstructuredGrid`` of the triangles with cell data ``region``
     and ``radius_ratio``."""
     try:
-        import pyvista  # type: ignore[import-not-found]
+        import pyvista
     except ImportError as error:
         raise ImportError("to_pyvista needs pyvista: pip install pyvista") from error
     grid = pyvista.from_meshio(mesh.to_meshio())

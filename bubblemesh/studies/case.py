@@ -16,6 +16,7 @@ shipped with the package.
 from __future__ import annotations
 
 import hashlib
+import importlib
 import importlib.util
 import json
 import re
@@ -201,10 +202,10 @@ def bundled_folder() -> Path:
     repository's ``cases/``, installed as ``bubblemesh.studies.data``; read in place when
     the source tree runs uninstalled)."""
     try:
-        from bubblemesh.studies import data  # type: ignore[attr-defined]
+        data = importlib.import_module("bubblemesh.studies.data")
     except ImportError:
         return Path(__file__).resolve().parents[2] / "cases"
-    return Path(data.__file__).parent
+    return Path(str(data.__file__)).parent
 
 
 def paper_cases() -> dict[str, Case]:
