@@ -15,8 +15,7 @@ deterministic.
 import numpy as np
 from numba import njit
 
-from ._smoothing import rho, shortest_edge
-from .predicates import orient2d
+from ._smoothing import shortest_edge, star_stats
 
 STEPS = (1.0, 0.5, 0.25)
 COMPASS = 8
@@ -31,25 +30,6 @@ def _circumcentre(ax, ay, bx, by, cx, cy):
     d = bx * cy - by * cx
     b2, c2 = bx * bx + by * by, cx * cx + cy * cy
     return ax + (cy * b2 - by * c2) / (2.0 * d), ay + (bx * c2 - cx * b2) / (2.0 * d), d
-
-
-@njit(cache=True)
-def star_stats(X, triangles, ptr, idx, i, px, py):
-    """(smallest, mean) radius ratio of node i's triangles with i at (px, py);
-    (-1, -1) if one of them is not strictly counter-clockwise (exact)."""
-    worst = 1.0
-    total = 0.0
-    for e in range(ptr[i], ptr[i + 1]):
-        t = idx[e]
-        k = 0 if triangles[t, 0] == i else (1 if triangles[t, 1] == i else 2)
-        u = triangles[t, (k + 1) % 3]
-        v = triangles[t, (k + 2) % 3]
-        if orient2d(px, py, X[u, 0], X[u, 1], X[v, 0], X[v, 1]) <= 0.0:
-            return -1.0, -1.0
-        q = rho(px, py, X[u, 0], X[u, 1], X[v, 0], X[v, 1])
-        worst = min(worst, q)
-        total += q
-    return worst, total / (ptr[i + 1] - ptr[i])
 
 
 @njit(cache=True)

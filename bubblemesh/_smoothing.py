@@ -59,19 +59,22 @@ def stars(triangles, n):
 
 
 @njit(cache=True)
-def _star_quality(X, triangles, ptr, idx, i, px, py):
-    """Smallest radius ratio of node i's triangles with i at (px, py); -1 if one
-    of them is not strictly counter-clockwise (exact)."""
+def star_stats(X, triangles, ptr, idx, i, px, py):
+    """(smallest, mean) radius ratio of node i's triangles with i at (px, py);
+    (-1, -1) if one of them is not strictly counter-clockwise (exact)."""
     worst = 1.0
+    total = 0.0
     for e in range(ptr[i], ptr[i + 1]):
         t = idx[e]
         k = 0 if triangles[t, 0] == i else (1 if triangles[t, 1] == i else 2)
         u = triangles[t, (k + 1) % 3]
         v = triangles[t, (k + 2) % 3]
         if orient2d(px, py, X[u, 0], X[u, 1], X[v, 0], X[v, 1]) <= 0.0:
-            return -1.0
-        worst = min(worst, rho(px, py, X[u, 0], X[u, 1], X[v, 0], X[v, 1]))
-    return worst
+            return -1.0, -1.0
+        q = rho(px, py, X[u, 0], X[u, 1], X[v, 0], X[v, 1])
+        worst = min(worst, q)
+        total += q
+    return worst, total / (ptr[i + 1] - ptr[i])
 
 
 @njit(cache=True)
@@ -106,11 +109,11 @@ def guarded_smooth(X, triangles, ptr, idx, n_boundary, sweeps, movable):
                         sy += X[v, 1]
             m = 2.0 * (ptr[i + 1] - ptr[i])
             tx, ty = sx / m, sy / m
-            before = _star_quality(X, triangles, ptr, idx, i, X[i, 0], X[i, 1])
+            before = star_stats(X, triangles, ptr, idx, i, X[i, 0], X[i, 1])[0]
             for step in STEPS:
                 px = X[i, 0] + step * (tx - X[i, 0])
                 py = X[i, 1] + step * (ty - X[i, 1])
-                if _star_quality(X, triangles, ptr, idx, i, px, py) > before:
+                if star_stats(X, triangles, ptr, idx, i, px, py)[0] > before:
                     X[i, 0] = px
                     X[i, 1] = py
                     moved += 1
@@ -142,7 +145,7 @@ def compass_polish(X, triangles, ptr, idx, n_boundary, poor, movable):
     for i in range(n_boundary, X.shape[0]):
         if not movable[i] or ptr[i + 1] == ptr[i]:
             continue
-        best = _star_quality(X, triangles, ptr, idx, i, X[i, 0], X[i, 1])
+        best = star_stats(X, triangles, ptr, idx, i, X[i, 0], X[i, 1])[0]
         if best >= poor:
             continue
         step = 0.1 * shortest_edge(X, triangles, ptr, idx, i)
@@ -154,7 +157,7 @@ def compass_polish(X, triangles, ptr, idx, n_boundary, poor, movable):
                     a = 2.0 * math.pi * d / COMPASS
                     px = X[i, 0] + step * math.cos(a)
                     py = X[i, 1] + step * math.sin(a)
-                    q = _star_quality(X, triangles, ptr, idx, i, px, py)
+                    q = star_stats(X, triangles, ptr, idx, i, px, py)[0]
                     if q > best:
                         X[i, 0] = px
                         X[i, 1] = py

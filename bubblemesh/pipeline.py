@@ -276,6 +276,15 @@ def _triangulate(X, segments):
         raise MeshingError(f"mesh: re-triangulation failed: {error}") from error
 
 
+def _retriangulate_unless_worse(X, segments, triangles, neighbors):
+    """The CDT of the moved nodes, unless it lowers the smallest radius ratio
+    (then the current connectivity stays: valid, since every move kept it so)."""
+    tri, nbr = _triangulate(X, segments)
+    if triangle_quality(X, tri).min() >= triangle_quality(X, triangles).min():
+        return tri, nbr
+    return triangles, neighbors
+
+
 def _polish(X, triangles, neighbors, segments, n_b, rounds, sweeps, movable):
     """Guarded smoothing alternating with re-triangulation; a re-triangulation
     that would lower the smallest radius ratio is not taken (the smoothed
@@ -288,9 +297,7 @@ def _polish(X, triangles, neighbors, segments, n_b, rounds, sweeps, movable):
         moves += taken
         if taken == 0:
             break
-        tri, nbr = _triangulate(X, segments)
-        if triangle_quality(X, tri).min() >= triangle_quality(X, triangles).min():
-            triangles, neighbors = tri, nbr
+        triangles, neighbors = _retriangulate_unless_worse(X, segments, triangles, neighbors)
     return triangles, neighbors, moves
 
 
@@ -318,9 +325,7 @@ def _settle(X, triangles, neighbors, segments, n_b, h, movable):
         moves += taken
         if taken == 0:
             break
-        tri, nbr = _triangulate(X, segments)
-        if triangle_quality(X, tri).min() >= triangle_quality(X, triangles).min():
-            triangles, neighbors = tri, nbr
+        triangles, neighbors = _retriangulate_unless_worse(X, segments, triangles, neighbors)
     triangles, neighbors = np.array(triangles), np.array(neighbors)
     floor = max(float(triangle_quality(X, triangles).min(initial=1.0)), KEEP)
     flips = improve_flips(X, triangles, neighbors, segment_keys(segments, len(X)),
