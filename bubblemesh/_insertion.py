@@ -9,10 +9,11 @@ error-free two-sum.  All state lives in the arrays (``state``'s slots), so the
 driver can grow them and call again.
 
 Sized mode (``bubblemesh.mesh``, not the paper): with ``capped`` true, r_e is
-min(eq. 3, ``factor`` h(centroid)) for a size field h passed as ``field``
-(:meth:`bubblemesh.sizing.SizeField.kernel_args`), so eq. 6 populates the domain
-to the field where the boundary alone would ask for fewer nodes.  With
-``capped`` false the kernel computes exactly the paper's eq. 3.
+``factor`` h(centroid) for a size field h passed as ``field``
+(:meth:`bubblemesh.sizing.SizeField.kernel_args`) instead of eq. 3's
+interpolation, so eq. 6 populates the domain to the field (which starts from
+the boundary spacing and grows at its gradation).  With ``capped`` false the
+kernel computes exactly the paper's eq. 3.
 """
 
 import math
@@ -83,7 +84,7 @@ def _prefetch_third_ring_nodes(R, tri, nbr, t):
 def _bubble(P, R, tri, t, r_e, capped, field, factor, stack):
     """Eq. 3-5 for triangle t: stores r_e and returns D_e (inf for a sliver
     whose floating-point area is 0: nothing to fill, never split).  ``capped``:
-    r_e no larger than ``factor`` times the size field at the centroid."""
+    r_e is ``factor`` times the size field at the centroid instead."""
     a = unsigned(tri[t, 0])
     b = unsigned(tri[t, 1])
     c = unsigned(tri[t, 2])
@@ -91,7 +92,7 @@ def _bubble(P, R, tri, t, r_e, capped, field, factor, stack):
         P[a, 0], P[a, 1], R[a], P[b, 0], P[b, 1], R[b], P[c, 0], P[c, 1], R[c]
     )
     if capped:
-        r = min(r, factor * cone_at(ex, ey, stack, *field))
+        r = factor * cone_at(ex, ey, stack, *field)
     r_e[t] = r
     area = triangle_area(P[a, 0], P[a, 1], P[b, 0], P[b, 1], P[c, 0], P[c, 1])
     if area == 0.0:

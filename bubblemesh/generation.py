@@ -105,9 +105,9 @@ def _check_arguments(name: str, domain: Any, max_insertions: Any) -> None:
 
 def generate_sized(domain, size_field, *, max_insertions=None, progress=False):
     """§2 driven by a size field as well as by the boundary (``bubblemesh.mesh``,
-    not the paper): each element bubble is r_e = min(eq. 3, the eq. 2 radius of
-    an equilateral triangle of side h(centroid)), so eq. 6 fills the domain to
-    the finer of the two.  ``size_field`` is a :class:`bubblemesh.sizing.SizeField`."""
+    not the paper): each element bubble is the eq. 2 radius of an equilateral
+    triangle of side h(centroid) instead of eq. 3's interpolation, so eq. 6
+    fills the domain to the field.  ``size_field`` is a :class:`bubblemesh.sizing.SizeField`."""
     from .sizing import SizeField
 
     _check_arguments("generate_sized", domain, max_insertions)

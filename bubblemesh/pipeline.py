@@ -6,7 +6,8 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    split to it (:func:`~bubblemesh.refinement.refine_boundary`, input nodes kept
    bit for bit), which makes the *refined boundary* §2.1 assumes.
 2. §2 (:func:`~bubblemesh.generation.generate_sized`): eq. 1-6 with every
-   element bubble capped by the field, so the interior follows the field too.
+   element bubble taken from the field (not eq. 3), so the interior follows
+   the field: the boundary spacing growing inward at the gradation rate.
 3. A stable §3: the eq. 7-8 overlap forces with the node bubbles anchored at
    their §2 radii (amplified, §3.1; eq. 9 is not applied, so radii cannot
    drift), stopped when the largest move falls below ``tol`` times the radius;
@@ -144,9 +145,14 @@ def _sharp_corner_warnings(domain: Domain) -> tuple[str, ...]:
     return tuple(out)
 
 
+MAX_AREA_FILL = 0.65
+
+
 def _user_size(size, max_area):
     """The user size as a number, a callable or None: ``size`` combined by min
-    with the side of the equilateral triangle of area ``max_area``."""
+    with the side of the equilateral triangle of area MAX_AREA_FILL times
+    ``max_area`` (the areas spread about +-35% around the field's, so that
+    mean keeps nearly every triangle below the bound)."""
     if max_area is None:
         return size
     try:
@@ -156,7 +162,7 @@ def _user_size(size, max_area):
                         f"{type(max_area).__name__}") from None
     if not (math.isfinite(area) and area > 0):
         raise ValueError(f"mesh: max_area must be finite and > 0, got {max_area!r}")
-    side = math.sqrt(4.0 * area / math.sqrt(3.0))
+    side = math.sqrt(4.0 * MAX_AREA_FILL * area / math.sqrt(3.0))
     if size is None:
         return side
     if callable(size):
