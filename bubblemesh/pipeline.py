@@ -34,6 +34,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ._corners import split_corners
 from ._flips import ideal_counts, improve_flips, segment_keys
 from ._forces import move
 from ._inside import boundary_clearance
@@ -320,7 +321,8 @@ def _settle(X, triangles, neighbors, segments, n_b, h, movable):
     ratio (each pass keeps every star at least min(its worst, max(mesh minimum,
     KEEP)); X in place): ODT (:mod:`bubblemesh._odt`) alternating with the CDT,
     then valence and quality flips (:mod:`bubblemesh._flips`; the mesh stays
-    valid and conforming but need not be constrained-Delaunay), then a compass
+    valid and conforming but need not be constrained-Delaunay) and corner
+    splits (:mod:`bubblemesh._corners`), then a compass
     search on each star's mean ratio.  Returns (triangles, neighbors, moves,
     flips)."""
     moves = 0
@@ -334,8 +336,13 @@ def _settle(X, triangles, neighbors, segments, n_b, h, movable):
         triangles, neighbors = _retriangulate_unless_worse(X, segments, triangles, neighbors)
     triangles, neighbors = np.array(triangles), np.array(neighbors)
     floor = max(float(triangle_quality(X, triangles).min(initial=1.0)), KEEP)
-    flips = improve_flips(X, triangles, neighbors, segment_keys(segments, len(X)),
-                          ideal_counts(X, triangles, len(X)), FLIP_PASSES, floor)
+    keys = segment_keys(segments, len(X))
+    flips = improve_flips(X, triangles, neighbors, keys, ideal_counts(X, triangles, len(X)),
+                          FLIP_PASSES, floor)
+    on_segment = np.zeros(len(X), np.bool_)
+    on_segment[segments.ravel()] = True
+    flips += split_corners(X, triangles, neighbors, keys, ideal_counts(X, triangles, len(X)),
+                           on_segment, movable)
     ptr, idx = stars(triangles, len(X))
     floor = max(float(triangle_quality(X, triangles).min(initial=1.0)), KEEP)
     moves += mean_polish(X, triangles, ptr, idx, n_b, MEAN_SWEEPS, movable, floor,

@@ -23,6 +23,7 @@ from test_pipeline import corner_domains
 
 import bubblemesh as bm
 from bubblemesh import pipeline
+from bubblemesh._corners import split_corners
 from bubblemesh._flips import ideal_counts, improve_flips, segment_keys
 from bubblemesh._odt import mean_polish, odt_smooth
 from bubblemesh._smoothing import stars
@@ -91,6 +92,52 @@ def test_a_flip_fixes_a_valence_defect_and_never_flips_a_segment():
     tri = np.array([[0, 1, 2], [0, 2, 3]])
     nbr = np.array([[-1, 1, -1], [-1, -1, 0]])
     assert improve_flips(Y, tri, nbr, segment_keys(segs[:4], 4), ideal, 5, 0.0) == 0
+
+
+@given(corner_domains(max_holes=2), st.sampled_from([0.3, 0.2]), st.integers(0, 2**32 - 1))
+def test_corner_splits_keep_the_mesh_valid_conforming_and_never_lower_the_minimum(loops, size,
+                                                                                  seed):
+    m, _ = _sized(loops, size)
+    X = np.array(m.points)
+    rng = np.random.default_rng(seed)
+    inner = slice(m.n_boundary, None)
+    X[inner] += rng.uniform(-0.15, 0.15, X[inner].shape) * m.radii[inner, None]
+    tri, nbr = bm.constrained_delaunay(X, m.segments)
+    tri, nbr = np.array(tri), np.array(nbr)
+    before_q = O.radius_ratio_reference(X, tri).min()
+    fixed = np.zeros(len(X), np.bool_)
+    fixed[np.asarray(m.segments).ravel()] = True
+    movable = ~fixed
+    P = X.copy()
+    split_corners(X, tri, nbr, segment_keys(np.asarray(m.segments), len(X)),
+                  ideal_counts(X, tri, len(X)), fixed, movable)
+    O.check_valid(X, tri, nbr)
+    O.check_conforming(X, tri, m.segments, area=m.domain.area, rel=1e-9)
+    assert O.radius_ratio_reference(X, tri).min() >= before_q * (1 - 1e-12)
+    np.testing.assert_array_equal(X[fixed], P[fixed])  # boundary nodes never move
+
+
+def test_a_corner_split_gives_a_wide_corner_its_second_triangle():
+    """A 120 degree corner v = 0 with one triangle (0, 1, 2) and the node 3
+    across 1-2: the split flips 1-2 to 0-3 and moves 3 toward the bisector,
+    raising the worst ratio from the single triangle's (0.46); with 1-2 a
+    segment nothing changes."""
+    c, s = np.cos(np.radians(30)), np.sin(np.radians(30))
+    X = np.array([(0.0, 0.0), (c, -s), (c, s), (1.2, 0.0)])
+    tri = np.array([[0, 1, 2], [2, 1, 3]])
+    nbr = np.array([[1, -1, -1], [-1, -1, 0]])
+    ideal = np.array([2, 1, 1, 1])
+    fixed = np.array([True, True, True, False])
+    segs = np.array([[0, 1], [1, 3], [3, 2], [2, 0]])
+    before = O.radius_ratio_reference(X, tri).min()
+    t2, n2, X2 = tri.copy(), nbr.copy(), X.copy()
+    assert split_corners(X2, t2, n2, segment_keys(np.vstack([segs, [[1, 2]]]), 4), ideal,
+                         fixed, ~fixed) == 0
+    np.testing.assert_array_equal(t2, tri)
+    assert split_corners(X, tri, nbr, segment_keys(segs, 4), ideal, fixed, ~fixed) == 1
+    O.check_valid(X, tri, nbr)
+    assert {frozenset(t) for t in tri.tolist()} == {frozenset((0, 1, 3)), frozenset((0, 3, 2))}
+    assert O.radius_ratio_reference(X, tri).min() > before + 0.1
 
 
 @given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
