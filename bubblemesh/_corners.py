@@ -75,6 +75,18 @@ def _split_star(X, tri, ptr, idx, d, u, v, a, b, px, py):
 
 
 @njit(cache=True)
+def _split_pair(X, v, a, b, d):
+    """Smaller ratio of (v, a, d) and (d, b, v); -1 if one is not strictly
+    counter-clockwise."""
+    if orient2d(X[v, 0], X[v, 1], X[a, 0], X[a, 1], X[d, 0], X[d, 1]) <= 0.0:
+        return -1.0
+    if orient2d(X[d, 0], X[d, 1], X[b, 0], X[b, 1], X[v, 0], X[v, 1]) <= 0.0:
+        return -1.0
+    return min(rho(X[v, 0], X[v, 1], X[a, 0], X[a, 1], X[d, 0], X[d, 1]),
+               rho(X[d, 0], X[d, 1], X[b, 0], X[b, 1], X[v, 0], X[v, 1]))
+
+
+@njit(cache=True)
 def _try_split(X, tri, nbr, keys, ptr, idx, movable, t, k):
     """Split at v = tri[t, k] as in the module docstring; True if taken."""
     n = X.shape[0]
@@ -88,11 +100,13 @@ def _try_split(X, tri, nbr, keys, ptr, idx, movable, t, k):
     while m < 2 and (tri[u, m] == a or tri[u, m] == b):
         m += 1
     d = tri[u, m]
-    before = rho(X[v, 0], X[v, 1], X[a, 0], X[a, 1], X[b, 0], X[b, 1])
+    old_t = rho(X[v, 0], X[v, 1], X[a, 0], X[a, 1], X[b, 0], X[b, 1])
+    old_star = 1.0  # d's triangles, u among them: they all change if d moves
     for e in range(ptr[d], ptr[d + 1]):
-        s = idx[e]
-        before = min(before, rho(X[tri[s, 0], 0], X[tri[s, 0], 1], X[tri[s, 1], 0],
-                                 X[tri[s, 1], 1], X[tri[s, 2], 0], X[tri[s, 2], 1]))
+        w = idx[e]
+        old_star = min(old_star, rho(X[tri[w, 0], 0], X[tri[w, 0], 1], X[tri[w, 1], 0],
+                                     X[tri[w, 1], 1], X[tri[w, 2], 0], X[tri[w, 2], 1]))
+    old_u = rho(X[b, 0], X[b, 1], X[a, 0], X[a, 1], X[d, 0], X[d, 1])
     la = math.hypot(X[a, 0] - X[v, 0], X[a, 1] - X[v, 1])
     lb = math.hypot(X[b, 0] - X[v, 0], X[b, 1] - X[v, 1])
     bx = (X[a, 0] - X[v, 0]) / la + (X[b, 0] - X[v, 0]) / lb
@@ -102,16 +116,21 @@ def _try_split(X, tri, nbr, keys, ptr, idx, movable, t, k):
         return False
     reach = 0.5 * (la + lb) / norm
     tx, ty = X[v, 0] + bx * reach, X[v, 1] + by * reach
-    best, bestx, besty = -1.0, X[d, 0], X[d, 1]
+    best, gain, bestx, besty = -1.0, GAIN, X[d, 0], X[d, 1]
     for s in STEPS:
         if s > 0.0 and not movable[d]:
             continue
         px = X[d, 0] + s * (tx - X[d, 0])
         py = X[d, 1] + s * (ty - X[d, 1])
-        q = _split_star(X, tri, ptr, idx, d, u, v, a, b, px, py)
-        if q > best:
+        if s > 0.0:  # every triangle at d changes
+            q = _split_star(X, tri, ptr, idx, d, u, v, a, b, px, py)
+            before = min(old_t, old_star)
+        else:  # only t and u change
+            q = _split_pair(X, v, a, b, d)
+            before = min(old_t, old_u)
+        if q - before > gain and q > best:
             best, bestx, besty = q, px, py
-    if best <= before + GAIN:
+    if best < 0.0:
         return False
     _flip(tri, nbr, t, k, u, m)
     X[d, 0] = bestx

@@ -103,18 +103,21 @@ def _check_arguments(name: str, domain: Any, max_insertions: Any) -> None:
                          f"got {max_insertions!r}")
 
 
-def generate_sized(domain, size_field, *, max_insertions=None, progress=False):
+def generate_sized(domain, size_field, *, max_insertions=None, progress=False, seeds=None):
     """§2 driven by a size field as well as by the boundary (``bubblemesh.mesh``,
     not the paper): each element bubble is the eq. 2 radius of an equilateral
     triangle of side h(centroid) instead of eq. 3's interpolation, so eq. 6
-    fills the domain to the field.  ``size_field`` is a :class:`bubblemesh.sizing.SizeField`."""
+    fills the domain to the field.  ``size_field`` is a :class:`bubblemesh.sizing.SizeField`;
+    ``seeds`` (S, 2), points strictly inside the domain, are nodes of the
+    initial triangulation with the field's bubbles (movable, after the
+    boundary nodes)."""
     from .sizing import SizeField
 
     _check_arguments("generate_sized", domain, max_insertions)
     if not isinstance(size_field, SizeField):
         raise TypeError(f"generate_sized: size_field must be a SizeField, got "
                         f"{type(size_field).__name__}")
-    return _generate(domain, max_insertions, progress, size_field)
+    return _generate(domain, max_insertions, progress, size_field, seeds)
 
 
 def _kernel_field(size_field):
@@ -130,13 +133,17 @@ def _kernel_field(size_field):
     return True, size_field.kernel_args(), _EQUILATERAL_RADIUS, stack, r_min
 
 
-def _generate(domain, max_insertions, progress, size_field):
+def _generate(domain, max_insertions, progress, size_field, seeds=None):
     """§2 of generate / generate_sized (the arguments checked)."""
     clock = PhaseClock()
     points = np.asarray(domain.points, dtype=np.float64)
+    radii = boundary_radii(points, domain.loops)  # (b) eq. 1-2
+    if seeds is not None and len(seeds):
+        seeds = np.asarray(seeds, dtype=np.float64).reshape(-1, 2)
+        points = np.concatenate([points, seeds])
+        radii = np.concatenate([radii, size_field.radius(seeds)])
     tri, nbr = constrained_delaunay(points, domain.segments)  # (a)
     clock.lap("boundary_cdt")
-    radii = boundary_radii(points, domain.loops)  # (b) eq. 1-2
     capped, field, factor, stack, r_field = _kernel_field(size_field)
     area_geo = float(domain.area)
     bound = _insertion_bound(area_geo, radii if not capped else

@@ -7,7 +7,9 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    bit for bit), which makes the *refined boundary* §2.1 assumes.
 2. §2 (:func:`~bubblemesh.generation.generate_sized`): eq. 1-6 with every
    element bubble taken from the field (not eq. 3), so the interior follows
-   the field: the boundary spacing growing inward at the gradation rate.
+   the field: the boundary spacing growing inward at the gradation rate.  The
+   initial triangulation holds frontal seeds (:mod:`bubblemesh._seeds`): the
+   apexes of equilateral triangles on the boundary edges where they have room.
 3. A stable §3: the eq. 7-8 overlap forces with the node bubbles anchored at
    their §2 radii (amplified, §3.1; eq. 9 is not applied, so radii cannot
    drift), stopped when the largest move falls below ``tol`` times the radius;
@@ -41,6 +43,7 @@ from ._inside import boundary_clearance
 from ._mesh import GenerationStats, Mesh, OptimizationStats
 from ._odt import mean_polish, odt_smooth
 from ._rings import node_adjacency, ring_neighbors, vertex_triangles
+from ._seeds import frontal_seeds, inside
 from ._smoothing import compass_polish, guarded_smooth, stars, triangle_quality
 from ._verlet import VerletLists
 from .domain import Domain
@@ -208,8 +211,9 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterati
     except GeometryError:  # a node an ulp off its segment touches a part a few ulps away
         fine = refined.exact_only().to_domain()
     clock.lap("sizing")
+    seeds = _frontal_seeds(fine)
     try:
-        generated = generate_sized(fine, field, progress=progress)
+        generated = generate_sized(fine, field, progress=progress, seeds=seeds)
     except MemoryError:  # sizes far finer than the domain's extent
         raise MeshingError("mesh: not enough memory for the mesh this size field asks for "
                            "(sizes far finer than the domain)") from None
@@ -232,6 +236,18 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterati
     except MemoryError:  # sizes far finer than the domain's extent
         raise MeshingError("mesh: not enough memory to optimise the mesh this size field "
                            "asks for (sizes far finer than the domain)") from None
+
+
+def _frontal_seeds(domain):
+    """The first row off the walls (:mod:`bubblemesh._seeds`), those exactly
+    inside the domain; none if one would touch a segment or a node."""
+    seeds = frontal_seeds(domain.points, domain.segments, domain.interior)
+    if not len(seeds):
+        return None
+    try:
+        return seeds[inside(domain.points, domain.segments, seeds)]
+    except GeometryError:
+        return None
 
 
 def _forces(mesh, R, max_iterations, tol, alpha, rings):
