@@ -109,8 +109,8 @@ def generate_sized(domain, size_field, *, max_insertions=None, progress=False, s
     triangle of side h(centroid) instead of eq. 3's interpolation, so eq. 6
     fills the domain to the field.  ``size_field`` is a :class:`bubblemesh.sizing.SizeField`;
     ``seeds`` (S, 2), points strictly inside the domain, are nodes of the
-    initial triangulation with the field's bubbles (movable, after the
-    boundary nodes)."""
+    initial triangulation with the field's bubbles (movable, numbered right
+    after the boundary nodes, in order)."""
     from .sizing import SizeField
 
     _check_arguments("generate_sized", domain, max_insertions)
@@ -176,8 +176,9 @@ def _generate(domain, max_insertions, progress, size_field, seeds=None):
     if status == STOP_MAX_INSERTIONS and (max_insertions is None or limit < max_insertions):
         raise MeshingError(f"generation reached its insertion bound {bound} without eq. 6")
     npts, ntri = int(state[S_NPTS]), int(state[S_NTRI])
+    n_seeds = 0 if seeds is None else len(seeds)  # kept after the boundary nodes
     points, radii, triangles, neighbors = spatial_renumbering(
-        ws.P[:npts], ws.R[:npts], ws.tri[:ntri], ws.nbr[:ntri], len(domain.points))
+        ws.P[:npts], ws.R[:npts], ws.tri[:ntri], ws.nbr[:ntri], len(domain.points) + n_seeds)
     clock.lap("renumbering")
     stats = GenerationStats(
         insertions=int(state[S_INSERTIONS]), cavity_triangles=int(state[S_CAVITY]),

@@ -9,10 +9,12 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    element bubble taken from the field (not eq. 3), so the interior follows
    the field: the boundary spacing growing inward at the gradation rate.  The
    initial triangulation holds frontal seeds (:mod:`bubblemesh._seeds`): the
-   apexes of equilateral triangles on the boundary edges where they have room.
+   apexes of equilateral triangles on the boundary edges where they have room,
+   and a node on the bisector of each corner that two triangles fit best.
 3. A stable §3: the eq. 7-8 overlap forces with the node bubbles anchored at
    their §2 radii (amplified, §3.1; eq. 9 is not applied, so radii cannot
-   drift), stopped when the largest move falls below ``tol`` times the radius;
+   drift; the frontal seeds hold still for the first HOLD of the iterations),
+   stopped when the largest move falls below ``tol`` times the radius;
    the §3.5 re-triangulation; then quality-guarded smoothing
    (:mod:`bubblemesh._smoothing`) alternating with re-triangulation; then
    settling: size-weighted ODT alternating with re-triangulation, valence and
@@ -79,6 +81,7 @@ POOR = 0.85  # stars whose worst radius ratio is below this get the compass sear
 KEEP = 0.8  # the settling passes may lower a star's worst ratio to max(mesh minimum, KEEP)
 ODT_ROUNDS, ODT_SWEEPS = 2, 6  # ODT passes, each followed by the CDT
 FLIP_PASSES = 20
+HOLD = 0.5  # the share of the §3 iterations for which the frontal seeds stay put
 MEAN_SWEEPS, MEAN_HALVINGS, MEAN_BELOW = 4, 4, 1.0  # 1.0: every star
 
 
@@ -90,12 +93,14 @@ class QualityWarning(UserWarning):
 class RobustGenerationStats(GenerationStats):
     """§2's record plus what the robust pipeline adds: ``warnings`` (one line
     per corner too sharp for a radius ratio of 0.7), the input and refined
-    boundary node counts, the size field's smallest and largest source."""
+    boundary node counts, the size field's smallest and largest source, the
+    number of frontal seeds (nodes n_boundary ... n_boundary + seeds - 1)."""
 
     warnings: tuple[str, ...] = ()
     input_boundary_nodes: int = 0
     refined_boundary_nodes: int = 0
     size_range: tuple[float, float] = (0.0, 0.0)
+    seeds: int = 0
 
 
 @dataclass(frozen=True)
@@ -224,7 +229,8 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterati
         **{k: getattr(generated.generation, k) for k in GenerationStats.__dataclass_fields__},
         warnings=notes, input_boundary_nodes=len(domain.points),
         refined_boundary_nodes=len(fine.points),
-        size_range=(float(field.values.min()), float(field.values.max())))
+        size_range=(float(field.values.min()), float(field.values.max())),
+        seeds=0 if seeds is None else len(seeds))
     generated = replace(generated, generation=gen)
     clock.lap("generation")
     try:
@@ -251,9 +257,13 @@ def _frontal_seeds(domain):
 
 
 def _forces(mesh, R, max_iterations, tol, alpha, rings):
-    """Eq. 7-8 with fixed radii R until the largest relative move < tol.
+    """Eq. 7-8 with fixed radii R until the largest relative move < tol.  For
+    the first HOLD of the iterations the frontal seeds hold still like the
+    boundary (the forces would push a seed out of its pocket between two
+    boundary nodes before the interior has settled around it).
     Returns (positions, iterations, last largest move, blocked moves, builds)."""
     n_b = mesh.n_boundary
+    n_hold = n_b + int(getattr(mesh.generation, "seeds", 0))
     P0 = np.ascontiguousarray(mesh.points)
     tri0 = np.ascontiguousarray(mesh.triangles)
     nbr0 = np.ascontiguousarray(mesh.neighbors)
@@ -263,20 +273,25 @@ def _forces(mesh, R, max_iterations, tol, alpha, rings):
     home = vertex_triangles(tri0, n)
     clearance = boundary_clearance(P0, np.asarray(mesh.segments), n_b,
                                    reach=4.0 * float(R.max(initial=0.0)))
-    lists = VerletLists(ring_ptr, ring_idx, n_b, 0.3)
-    expired, iterations, largest, blocked = True, 0, 0.0, 0
-    while iterations < max_iterations:
-        iterations += 1
-        if expired:
-            lists.build(X, R)
-        expired, stuck, largest = move(X, R, Xn, home, *lists.arrays, False, n_b, alpha, P0,
-                                       tri0, nbr0, clearance, lists.X0, lists.R0, lists.skin)
-        expired = expired > 0
-        blocked += stuck
-        X, Xn = Xn, X
-        if largest < tol:
-            break
-    return X, iterations, float(largest), int(blocked), lists.builds
+    iterations, largest, blocked, builds = 0, 0.0, 0, 0
+    held = int(HOLD * max_iterations) if n_hold > n_b else 0
+    for fixed, limit in ((n_hold, held), (n_b, max_iterations)):
+        lists = VerletLists(ring_ptr, ring_idx, fixed, 0.3)
+        expired = True
+        while iterations < limit:
+            iterations += 1
+            if expired:
+                lists.build(X, R)
+            expired, stuck, largest = move(X, R, Xn, home, *lists.arrays, False, fixed, alpha,
+                                           P0, tri0, nbr0, clearance, lists.X0, lists.R0,
+                                           lists.skin)
+            expired = expired > 0
+            blocked += stuck
+            X, Xn = Xn, X
+            if largest < tol:
+                break
+        builds += lists.builds
+    return X, iterations, float(largest), int(blocked), builds
 
 
 def _separate(X, P0):
@@ -384,6 +399,7 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
     triangles, neighbors = _triangulate(X, segments)
     movable = np.ones(n, dtype=np.bool_)
     movable[np.unique(segments)] = False  # segment endpoints never move
+    movable[:n_b] = False  # nor boundary nodes and free points
     triangles, neighbors, moves = _polish(X, triangles, neighbors, segments, n_b,
                                           smoothing_rounds, smoothing_sweeps, movable)
     settled, flips = 0, 0
@@ -413,6 +429,7 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
         neighbors = np.array(mesh.neighbors)
         movable[:] = True
         movable[np.unique(segments)] = False
+        movable[:n_b] = False
         triangles, neighbors, moves = _polish(X, triangles, neighbors, segments, n_b,
                                               smoothing_rounds, smoothing_sweeps, movable)
     clock.lap("smoothing")

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from test_pipeline import corner_domains
 
 import bubblemesh as bm
-from bubblemesh._seeds import ROOM, frontal_seeds, inside
+from bubblemesh._seeds import CORNER_HIGH, CORNER_LOW, ROOM, frontal_seeds, inside
 from bubblemesh.generation import generate_sized
 from bubblemesh.refinement import refine_boundary
 from bubblemesh.sizing import SizeField
@@ -30,27 +30,55 @@ def _apex(P, s):
     return 0.5 * (a + b) + np.sqrt(3) / 2 * np.array([-e[1], e[0]]), float(np.hypot(*e))
 
 
+def _owners(P, S):
+    """Every point a seed may be, with (own nodes, own segments, length):
+    segment apexes, and the bisector points of corners in the seeded range."""
+    owners = [(x, list(s), [i], L) for i, s in enumerate(S) for x, L in [_apex(P, s)]]
+    for i, (u, v) in enumerate(S):
+        j = int(np.nonzero(S[:, 0] == v)[0][0])
+        w = S[j, 1]
+        to_w, to_u = P[w] - P[v], P[u] - P[v]
+        theta = np.arctan2(to_w[0] * to_u[1] - to_w[1] * to_u[0], to_w @ to_u) % (2 * np.pi)
+        if CORNER_LOW <= theta < CORNER_HIGH:
+            reach = 0.5 * (np.hypot(*to_w) + np.hypot(*to_u))
+            direction = np.array([np.cos(np.arctan2(to_w[1], to_w[0]) + theta / 2),
+                                  np.sin(np.arctan2(to_w[1], to_w[0]) + theta / 2)])
+            owners.append((P[v] + reach * direction, [u, v, w], [i, j], reach))
+    return owners
+
+
 @given(corner_domains(max_holes=2), st.sampled_from([0.3, 0.15]))
-def test_seeds_are_apexes_with_room_inside_the_domain(loops, size):
+def test_seeds_are_apexes_or_corner_bisectors_with_room_inside_the_domain(loops, size):
     fine, _ = _refined(loops, size)
     P, S = np.asarray(fine.points), np.asarray(fine.segments)
     seeds = frontal_seeds(P, S, fine.interior)
-    apexes = [_apex(P, s) for s in S]
+    owners = _owners(P, S)
     polygon = shapely.Polygon(P[fine.loops[0]], [P[ix] for ix in fine.loops[1:]])
     mids = 0.5 * (P[S[:, 0]] + P[S[:, 1]])
     for x in seeds:
-        own = [i for i, (p, _) in enumerate(apexes) if np.array_equal(p, x)]
-        assert own, "a seed is no segment's apex"
-        i = own[0]
-        length = apexes[i][1]
-        others = np.delete(P, S[i], axis=0)
-        assert np.hypot(*(others - x).T).min() >= ROOM * length
-        assert np.hypot(*(mids - x).T).min() >= ROOM * length
+        match = [o for o in owners if np.allclose(o[0], x, rtol=0, atol=1e-12)]
+        assert match, "a seed is neither an apex nor a corner's bisector point"
+        _, nodes, segs, length = match[0]
+        others = np.delete(P, nodes, axis=0)
+        assert np.hypot(*(others - x).T).min() >= ROOM * length * (1 - 1e-12)
+        assert np.hypot(*(np.delete(mids, segs, axis=0) - x).T).min() >= ROOM * length * (
+            1 - 1e-12)
         assert polygon.contains(shapely.Point(x))  # GEOS: inside, off the boundary
-    if len(seeds):
+    if len(seeds) > 1:
         d = np.hypot(*(seeds[:, None] - seeds[None]).T)
         np.fill_diagonal(d, np.inf)
-        assert d.min() >= ROOM * min(L for _, L in apexes) * (1 - 1e-12)
+        assert d.min() >= ROOM * min(o[3] for o in owners) * (1 - 1e-12)
+
+
+def test_a_square_gets_a_seed_on_each_corner_bisector():
+    square = bm.Domain.from_loops([np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float)])
+    fine, _ = _refined([np.asarray(square.points)], 0.1)
+    seeds = frontal_seeds(fine.points, fine.segments, fine.interior)
+    h = 0.1
+    for corner in [(0, 0), (1, 0), (1, 1), (0, 1)]:
+        inward = np.sign(0.5 - np.array(corner, float)) * h / np.sqrt(2)
+        assert np.isclose(np.hypot(*(seeds - (np.array(corner) + inward)).T), 0,
+                          atol=1e-9).any()
 
 
 def test_inside_is_exact_about_points_outside_and_in_holes():
