@@ -50,7 +50,7 @@ from ._smoothing import compass_polish, guarded_smooth, stars, triangle_quality
 from ._verlet import VerletLists
 from .domain import Domain
 from .errors import GeometryError, MeshingError
-from .generation import generate_sized
+from .generation import check_field_fits, generate_sized
 from .refinement import refine_boundary
 from .sizing import _EQUILATERAL_RADIUS, SizeField, as_size_function
 from .timing import PhaseClock
@@ -81,6 +81,7 @@ POOR = 0.85  # stars whose worst radius ratio is below this get the compass sear
 KEEP = 0.8  # the settling passes may lower a star's worst ratio to max(mesh minimum, KEEP)
 ODT_ROUNDS, ODT_SWEEPS = 2, 6  # ODT passes, each followed by the CDT
 FLIP_PASSES = 20
+MAX_SCALE = 1e12  # largest domain extent over the smallest size that bm.mesh takes
 HOLD = 0.5  # the share of the §3 iterations for which the frontal seeds stay put
 MEAN_SWEEPS, MEAN_HALVINGS, MEAN_BELOW = 4, 4, 1.0  # 1.0: every star
 
@@ -208,6 +209,7 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterati
     try:
         field = SizeField.from_domain(domain, size=_user_size(size, max_area),
                                       gradation=gradation)
+        _check_scale(domain, field)
         refined = refine_boundary(domain, field)
     except (TypeError, ValueError) as error:
         raise type(error)(f"mesh: {error}") from None
@@ -216,7 +218,7 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterati
     except GeometryError:  # a node an ulp off its segment touches a part a few ulps away
         fine = refined.exact_only().to_domain()
     clock.lap("sizing")
-    seeds = _frontal_seeds(fine)
+    seeds = _frontal_seeds(fine, field)
     try:
         generated = generate_sized(fine, field, progress=progress, seeds=seeds)
     except MemoryError:  # sizes far finer than the domain's extent
@@ -244,16 +246,29 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterati
                            "asks for (sizes far finer than the domain)") from None
 
 
-def _frontal_seeds(domain):
-    """The first row off the walls (:mod:`bubblemesh._seeds`), those exactly
-    inside the domain; none if one would touch a segment or a node."""
-    seeds = frontal_seeds(domain.points, domain.segments, domain.interior)
+def _check_scale(domain, field):
+    """MeshingError when the domain spans more than MAX_SCALE times its
+    smallest size: §3 and the smoothing move nodes in floating point, and a
+    graded mesh over that range is beyond double precision's reach."""
+    P = np.asarray(domain.points)
+    extent = float(np.max(P.max(axis=0) - P.min(axis=0)))
+    smallest = float(field.values.min())
+    if not extent <= MAX_SCALE * smallest:
+        raise MeshingError(f"mesh: the domain spans {extent:.3g} but its smallest size is "
+                           f"{smallest:.3g}, more than {MAX_SCALE:.0e} times smaller: rescale "
+                           "or split the domain, or use paper=True")
+
+
+def _frontal_seeds(domain, field):
+    """The first row off the walls (:mod:`bubblemesh._seeds`), those strictly
+    inside the domain.  The boundary's triangulation, built for that, first
+    tells whether the field's mesh fits in memory at all."""
+    tri, nbr = _triangulate(np.asarray(domain.points), domain.segments)
+    check_field_fits(np.asarray(domain.points), np.asarray(tri), field)
+    seeds, rows = frontal_seeds(domain.points, domain.segments, domain.interior)
     if not len(seeds):
         return None
-    try:
-        return seeds[inside(domain.points, domain.segments, seeds)]
-    except GeometryError:
-        return None
+    return seeds[inside(domain.points, domain.segments, tri, nbr, seeds, rows)]
 
 
 def _forces(mesh, R, max_iterations, tol, alpha, rings):

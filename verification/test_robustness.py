@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import warnings
 from fractions import Fraction
 
 import numpy as np
@@ -129,3 +130,17 @@ def test_a_boundary_finer_than_memory_allows_is_refused_up_front():
         bm.generate(domain)
     only_boundary = bm.generate(domain, max_insertions=0)  # sized for what it builds
     assert len(only_boundary.points) == 100_000 and only_boundary.insertions == 0
+
+
+def test_a_domain_beyond_double_precision_s_range_is_refused_in_one_line():
+    """A triangle of base 1 reaching 1e14 away: a graded mesh over 14 orders
+    of magnitude is refused by bm.mesh (quickly, naming both sizes); 1e4 is
+    meshed, valid."""
+    far = bm.Domain.from_loops([[(0.0, 0.0), (1.0, 0.0), (0.5, 1e14)]])
+    with pytest.raises(bm.MeshingError, match=r"spans 1e\+14 .* smallest size"):
+        bm.mesh(far)
+    near = bm.Domain.from_loops([[(0.0, 0.0), (1.0, 0.0), (0.5, 1e4)]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", bm.QualityWarning)
+        m = bm.mesh(near)
+    O.check_valid(m.points, m.triangles, m.neighbors)

@@ -51,7 +51,7 @@ def _owners(P, S):
 def test_seeds_are_apexes_or_corner_bisectors_with_room_inside_the_domain(loops, size):
     fine, _ = _refined(loops, size)
     P, S = np.asarray(fine.points), np.asarray(fine.segments)
-    seeds = frontal_seeds(P, S, fine.interior)
+    seeds, _ = frontal_seeds(P, S, fine.interior)
     owners = _owners(P, S)
     polygon = shapely.Polygon(P[fine.loops[0]], [P[ix] for ix in fine.loops[1:]])
     mids = 0.5 * (P[S[:, 0]] + P[S[:, 1]])
@@ -70,31 +70,43 @@ def test_seeds_are_apexes_or_corner_bisectors_with_room_inside_the_domain(loops,
         assert d.min() >= ROOM * min(o[3] for o in owners) * (1 - 1e-12)
 
 
-def test_a_square_gets_a_seed_on_each_corner_bisector():
-    square = bm.Domain.from_loops([np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float)])
-    fine, _ = _refined([np.asarray(square.points)], 0.1)
-    seeds = frontal_seeds(fine.points, fine.segments, fine.interior)
-    h = 0.1
-    for corner in [(0, 0), (1, 0), (1, 1), (0, 1)]:
-        inward = np.sign(0.5 - np.array(corner, float)) * h / np.sqrt(2)
-        assert np.isclose(np.hypot(*(seeds - (np.array(corner) + inward)).T), 0,
-                          atol=1e-9).any()
+def test_a_hexagon_gets_a_seed_on_each_corner_bisector():
+    """120 degree corners: a seed toward the centre at the segment length."""
+    corners = np.array([(np.cos(a), np.sin(a)) for a in np.arange(6) * np.pi / 3])
+    fine, _ = _refined([corners], 0.1)
+    seeds, _ = frontal_seeds(fine.points, fine.segments, fine.interior)
+    first = np.linalg.norm(fine.points[1] - fine.points[0])  # the refined spacing
+    for c in corners:
+        want = c - first * c  # the centre is at the origin, |c| = 1
+        assert np.isclose(np.hypot(*(seeds - want).T), 0, atol=1e-9).any(), c
 
 
-def test_inside_is_exact_about_points_outside_and_in_holes():
+def test_inside_is_exact_about_points_outside_in_holes_and_on_edges():
     square = np.array([(0, 0), (4, 0), (4, 4), (0, 4)], float)
     hole = np.array([(1, 1), (1, 3), (3, 3), (3, 1)], float)
     fine = bm.Domain.from_loops([square, hole])
-    seeds = np.array([(0.5, 0.5), (2.0, 2.0), (5.0, 1.0), (3.5, 3.5)])
-    np.testing.assert_array_equal(inside(fine.points, fine.segments, seeds),
-                                  [True, False, False, True])
+    tri, nbr = bm.constrained_delaunay(fine.points, fine.segments)
+    seeds = np.array([(0.5, 0.25), (2.0, 2.0), (5.0, 1.0), (3.5, 3.2), (0.5, 0.5), (4.0, 2.0)])
+    segments = np.asarray(fine.segments)
+    bottom = int(np.nonzero((fine.points[segments[:, 0], 1] == 0)
+                            & (fine.points[segments[:, 1], 1] == 0))[0][0])
+    rows = np.full(len(seeds), bottom)
+    expected = [O.domain_location(fine.points, fine.loops, x) > 0 for x in seeds.tolist()]
+    assert expected == [True, False, False, True, True, False]
+    # a seed on an edge of the triangulation is dropped too: (0.5, 0.5) is on
+    # the diagonal from (0, 0) to (1, 1), inside the domain but not strictly in a triangle
+    corner, inner = 0, 4  # (0, 0) and (1, 1)
+    on_edge = any({corner, inner} <= set(t) for t in np.asarray(tri).tolist())
+    got = inside(fine.points, fine.segments, tri, nbr, seeds, rows)
+    assert got.tolist() == expected[:4] + [not on_edge, False]
 
 
 @given(corner_domains(max_holes=2), st.sampled_from([0.3, 0.15]))
 def test_a_seeded_generation_is_valid_and_keeps_its_seeds(loops, size):
     fine, field = _refined(loops, size)
-    seeds = frontal_seeds(fine.points, fine.segments, fine.interior)
-    seeds = seeds[inside(fine.points, fine.segments, seeds)]
+    seeds, rows = frontal_seeds(fine.points, fine.segments, fine.interior)
+    tri, nbr = bm.constrained_delaunay(fine.points, fine.segments)
+    seeds = seeds[inside(fine.points, fine.segments, tri, nbr, seeds, rows)]
     m = generate_sized(fine, field, seeds=seeds)
     O.check_valid(m.points, m.triangles, m.neighbors)
     O.check_conforming(m.points, m.triangles, m.segments, area=fine.area, rel=1e-9)
