@@ -34,7 +34,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ._flips import ideal_counts, improve_flips, segment_keys
+from ._flips import delaunay_flips, ideal_counts, improve_flips, segment_keys
 from ._forces import move
 from ._inside import boundary_clearance
 from ._mesh import GenerationStats, Mesh, OptimizationStats
@@ -284,8 +284,12 @@ def _triangulate(X, segments):
 
 def _retriangulate_unless_worse(X, segments, triangles, neighbors):
     """The CDT of the moved nodes, unless it lowers the smallest radius ratio
-    (then the current connectivity stays: valid, since every move kept it so)."""
-    tri, nbr = _triangulate(X, segments)
+    (then the current connectivity stays: valid, since every move kept it so).
+    The CDT comes from Lawson's flips on the current, valid connectivity (the
+    nodes moved a little, so few edges flip); a full CDT if they run long."""
+    tri, nbr = np.array(triangles), np.array(neighbors)
+    if delaunay_flips(X, tri, nbr, segment_keys(segments, len(X)), 4 * len(tri)) < 0:
+        tri, nbr = _triangulate(X, segments)
     if triangle_quality(X, tri).min() >= triangle_quality(X, triangles).min():
         return tri, nbr
     return triangles, neighbors
