@@ -15,7 +15,7 @@ deterministic.
 import numpy as np
 from numba import njit
 
-from ._smoothing import shortest_edge, star_stats
+from ._smoothing import gather_star, gathered_stats, shortest_edge, star_buffer
 
 STEPS = (1.0, 0.5, 0.25)
 COMPASS = 8
@@ -59,6 +59,7 @@ def odt_smooth(X, triangles, ptr, idx, h, n_boundary, sweeps, movable, floor, to
     when no node moves by more than ``tol`` times its size.  Returns (moves
     taken, sweeps run)."""
     taken = 0
+    buf = star_buffer(ptr)
     run = 0
     for _ in range(sweeps):
         run += 1
@@ -66,15 +67,16 @@ def odt_smooth(X, triangles, ptr, idx, h, n_boundary, sweeps, movable, floor, to
         for i in range(n_boundary, X.shape[0]):
             if not movable[i] or ptr[i + 1] == ptr[i]:
                 continue
+            deg = gather_star(X, triangles, ptr, idx, i, buf)
             tx, ty = _odt_target(X, triangles, ptr, idx, h, i)
-            before, mean = star_stats(X, triangles, ptr, idx, i, X[i, 0], X[i, 1])
+            before, mean = gathered_stats(buf, deg, X[i, 0], X[i, 1])
             need = max(min(before, floor), 0.0)
             for step in STEPS:
                 px = X[i, 0] + step * (tx - X[i, 0])
                 py = X[i, 1] + step * (ty - X[i, 1])
                 if px == X[i, 0] and py == X[i, 1]:
                     break
-                q, m = star_stats(X, triangles, ptr, idx, i, px, py)
+                q, m = gathered_stats(buf, deg, px, py)
                 if q > 0.0 and q >= need and m > mean:
                     largest = max(largest, np.hypot(px - X[i, 0], py - X[i, 1]) / h[i])
                     X[i, 0] = px
@@ -95,12 +97,14 @@ def mean_polish(X, triangles, ptr, idx, n_boundary, sweeps, movable, floor, halv
     Only stars whose mean is below ``below`` are searched.  ``sweeps``
     Gauss-Seidel sweeps; X in place.  Returns the steps taken."""
     taken = 0
+    buf = star_buffer(ptr)
     for _ in range(sweeps):
         moved = 0
         for i in range(n_boundary, X.shape[0]):
             if not movable[i] or ptr[i + 1] == ptr[i]:
                 continue
-            worst, mean = star_stats(X, triangles, ptr, idx, i, X[i, 0], X[i, 1])
+            deg = gather_star(X, triangles, ptr, idx, i, buf)
+            worst, mean = gathered_stats(buf, deg, X[i, 0], X[i, 1])
             if mean >= below:
                 continue
             need = max(min(worst, floor), 0.0)
@@ -109,7 +113,7 @@ def mean_polish(X, triangles, ptr, idx, n_boundary, sweeps, movable, floor, halv
                 for d in range(COMPASS):
                     px = X[i, 0] + step * DX[d]
                     py = X[i, 1] + step * DY[d]
-                    q, m = star_stats(X, triangles, ptr, idx, i, px, py)
+                    q, m = gathered_stats(buf, deg, px, py)
                     if q > 0.0 and q >= need and m > mean + 1e-12:
                         X[i, 0] = px
                         X[i, 1] = py
