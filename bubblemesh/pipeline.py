@@ -73,7 +73,7 @@ def _sharp_angle(target: float = 0.7) -> float:
 SHARP_ANGLE = _sharp_angle()  # ~27.2 degrees
 POOR = 0.85  # stars whose worst radius ratio is below this get the compass search
 KEEP = 0.8  # the settling passes may lower a star's worst ratio to max(mesh minimum, KEEP)
-ODT_ROUNDS, ODT_SWEEPS = 2, 6  # ODT passes, each followed by the CDT
+ODT_ROUNDS, ODT_SWEEPS = 2, 2  # ODT passes, each followed by the CDT
 FLIP_PASSES = 20
 MEAN_SWEEPS, MEAN_HALVINGS, MEAN_BELOW = 4, 4, 1.0  # 1.0: every star
 
