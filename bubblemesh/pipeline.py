@@ -76,6 +76,7 @@ KEEP = 0.8  # the settling passes may lower a star's worst ratio to max(mesh min
 ODT_ROUNDS, ODT_SWEEPS = 2, 2  # ODT passes, each followed by the CDT
 FLIP_PASSES = 20
 MEAN_SWEEPS, MEAN_HALVINGS, MEAN_BELOW = 4, 4, 1.0  # 1.0: every star
+MEAN_STEPS = 3  # gradient steps per star visit before any compass search
 
 
 class QualityWarning(UserWarning):
@@ -324,9 +325,9 @@ def _settle(X, triangles, neighbors, segments, n_b, h, movable):
     ratio (each pass keeps every star at least min(its worst, max(mesh minimum,
     KEEP)); X in place): ODT (:mod:`bubblemesh._odt`) alternating with the CDT,
     then valence and quality flips (:mod:`bubblemesh._flips`; the mesh stays
-    valid and conforming but need not be constrained-Delaunay), then a compass
-    search on each star's mean ratio.  Returns (triangles, neighbors, moves,
-    flips)."""
+    valid and conforming but need not be constrained-Delaunay), then gradient
+    steps on each star's mean ratio (a compass search where they are blocked).
+    Returns (triangles, neighbors, moves, flips)."""
     moves = 0
     for _ in range(ODT_ROUNDS):
         floor = max(float(triangle_quality(X, triangles).min(initial=1.0)), KEEP)
@@ -343,7 +344,7 @@ def _settle(X, triangles, neighbors, segments, n_b, h, movable):
     ptr, idx = stars(triangles, len(X))
     floor = max(float(triangle_quality(X, triangles).min(initial=1.0)), KEEP)
     moves += mean_polish(X, triangles, ptr, idx, n_b, MEAN_SWEEPS, movable, floor,
-                         MEAN_HALVINGS, MEAN_BELOW)
+                         MEAN_HALVINGS, MEAN_BELOW, MEAN_STEPS)
     return triangles, neighbors, moves, int(flips)
 
 
