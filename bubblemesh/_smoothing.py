@@ -126,6 +126,22 @@ def gathered_stats(buf, deg, px, py):
 
 
 @njit(cache=True)
+def star_unchanged(triangles, ptr, idx, i, moved_at, seen_at):
+    """True if neither node i nor a node of its star has moved since i was
+    last looked at (visit ``seen_at[i]``; ``moved_at``: the visit of each
+    node's last move, -1 for never): looking again would find what the last
+    look did, no move.  The active set of a Gauss-Seidel sweep."""
+    if seen_at[i] < 0 or moved_at[i] >= seen_at[i]:
+        return False
+    for e in range(ptr[i], ptr[i + 1]):
+        t = idx[e]
+        for k in range(3):
+            if moved_at[triangles[t, k]] > seen_at[i]:
+                return False
+    return True
+
+
+@njit(cache=True)
 def triangle_quality(X, triangles):
     """Eq. 10 per triangle (0 for one that is not counter-clockwise)."""
     q = np.empty(triangles.shape[0])
@@ -142,11 +158,18 @@ def guarded_smooth(X, triangles, ptr, idx, n_boundary, sweeps, movable):
     number of moves taken."""
     taken = 0
     buf = star_buffer(ptr)
+    moved_at = np.full(X.shape[0], -1, np.int64)
+    seen_at = np.full(X.shape[0], -1, np.int64)
+    visit = 0
     for _ in range(sweeps):
         moved = 0
         for i in range(n_boundary, X.shape[0]):
             if not movable[i] or ptr[i + 1] == ptr[i]:
                 continue
+            visit += 1
+            if star_unchanged(triangles, ptr, idx, i, moved_at, seen_at):
+                continue  # the same look as last time: no move
+            seen_at[i] = visit
             deg = gather_star(X, triangles, ptr, idx, i, buf)
             sx = 0.0
             sy = 0.0
@@ -167,6 +190,7 @@ def guarded_smooth(X, triangles, ptr, idx, n_boundary, sweeps, movable):
                     X[i, 0] = px
                     X[i, 1] = py
                     moved += 1
+                    moved_at[i] = visit
                     break
         taken += moved
         if moved == 0:
