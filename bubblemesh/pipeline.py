@@ -268,8 +268,12 @@ def _separate(X, P0):
     the origin, where floats are coarse) go back to their distinct §2
     positions; each round reverts at least one node, so it ends."""
     for _ in range(len(X)):
-        _, inverse, counts = np.unique(X, axis=0, return_inverse=True, return_counts=True)
-        shared = counts[inverse.reshape(-1)] > 1
+        order = np.lexsort((X[:, 1], X[:, 0]))  # equal points end up side by side
+        S = X[order]
+        same = (S[1:, 0] == S[:-1, 0]) & (S[1:, 1] == S[:-1, 1])
+        shared = np.zeros(len(X), dtype=bool)
+        shared[order[1:][same]] = True
+        shared[order[:-1][same]] = True
         back = shared & np.any(X != P0, axis=1)
         if not back.any():
             return
