@@ -293,7 +293,10 @@ def _retriangulate_unless_worse(X, segments, triangles, neighbors):
     The CDT comes from Lawson's flips on the current, valid connectivity (the
     nodes moved a little, so few edges flip); a full CDT if they run long."""
     tri, nbr = np.array(triangles), np.array(neighbors)
-    if delaunay_flips(X, tri, nbr, segment_keys(segments, len(X)), 4 * len(tri)) < 0:
+    flips = delaunay_flips(X, tri, nbr, segment_keys(segments, len(X)), 4 * len(tri))
+    if flips == 0:
+        return triangles, neighbors  # already the CDT
+    if flips < 0:
         tri, nbr = _triangulate(X, segments)
     if triangle_quality(X, tri).min() >= triangle_quality(X, triangles).min():
         return tri, nbr
