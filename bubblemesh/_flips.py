@@ -1,4 +1,7 @@
-"""Valence- and quality-driven edge flips for ``bubblemesh.mesh`` (not in the paper).
+"""Valence- and quality-driven edge flips for ``bubblemesh.mesh`` (not in the paper),
+and Lawson's Delaunay flips (:func:`delaunay_flips`), which turn a valid
+conforming triangulation of moved nodes back into their constrained Delaunay
+triangulation (§3.5) without building it anew.
 
 An interior edge ab shared by t = (a, b, c) and u = (b, a, d) becomes cd when
 the quadrilateral acbd is strictly convex (exact :func:`orient2d`), ab is not a
@@ -22,7 +25,7 @@ import numpy as np
 from numba import njit
 
 from ._smoothing import rho
-from .predicates import orient2d
+from .predicates import incircle, orient2d
 
 GAIN = 1e-9  # a quality flip must raise the pair's worst ratio by more than this
 
@@ -156,4 +159,52 @@ def improve_flips(X, tri, nbr, keys, ideal, max_passes, relax):
         flips += flipped
         if flipped == 0:
             break
+    return flips
+
+
+@njit(cache=True)
+def delaunay_flips(X, tri, nbr, keys, max_flips):
+    """Lawson's flips: while an interior non-segment edge ab of t = (c, a, b)
+    and u = (b, a, d) has d strictly inside the circle through c, a, b (exact
+    :func:`incircle`), flip it to cd; ``tri`` and ``nbr`` in place.  From a
+    valid triangulation this ends at the constrained Delaunay triangulation
+    (any one of them when four nodes are cocircular).  Each edge waits in a
+    ring queue at most once at a time.  Returns the number of flips, -1 if
+    ``max_flips`` was reached first."""
+    n = X.shape[0]
+    m_tri = tri.shape[0]
+    size = 3 * m_tri
+    queued = np.ones(size, np.bool_)
+    queue = np.arange(size)
+    head = 0
+    waiting = size
+    flips = 0
+    while waiting > 0:
+        e = queue[head]
+        head = head + 1 if head + 1 < size else 0
+        waiting -= 1
+        queued[e] = False
+        t, k = e // 3, e % 3
+        u = nbr[t, k]
+        if u < 0:
+            continue
+        c = tri[t, k]
+        a = tri[t, (k + 1) % 3]
+        b = tri[t, (k + 2) % 3]
+        m = 0
+        while m < 2 and (tri[u, m] == a or tri[u, m] == b):
+            m += 1
+        d = tri[u, m]
+        if incircle(X[c, 0], X[c, 1], X[a, 0], X[a, 1], X[b, 0], X[b, 1],
+                    X[d, 0], X[d, 1]) <= 0.0 or _is_segment(keys, n, a, b):
+            continue
+        if flips == max_flips:
+            return -1
+        _flip(tri, nbr, t, k, u, m)  # t = (c, a, d), u = (d, b, c)
+        flips += 1
+        for f in (3 * t, 3 * t + 2, 3 * u, 3 * u + 2):  # the four outer edges
+            if not queued[f]:
+                queued[f] = True
+                queue[(head + waiting) % size] = f
+                waiting += 1
     return flips

@@ -15,10 +15,11 @@ deterministic.
 import numpy as np
 from numba import njit
 
-from ._smoothing import shortest_edge, star_stats
+from ._smoothing import gather_star, gathered_stats, shortest_edge, star_buffer
 
 STEPS = (1.0, 0.5, 0.25)
 COMPASS = 8
+BACKTRACKS = 5  # a gradient step is halved up to 4 times
 DX = np.cos(2.0 * np.pi * np.arange(COMPASS) / COMPASS)
 DY = np.sin(2.0 * np.pi * np.arange(COMPASS) / COMPASS)
 
@@ -59,6 +60,7 @@ def odt_smooth(X, triangles, ptr, idx, h, n_boundary, sweeps, movable, floor, to
     when no node moves by more than ``tol`` times its size.  Returns (moves
     taken, sweeps run)."""
     taken = 0
+    buf = star_buffer(ptr)
     run = 0
     for _ in range(sweeps):
         run += 1
@@ -66,15 +68,16 @@ def odt_smooth(X, triangles, ptr, idx, h, n_boundary, sweeps, movable, floor, to
         for i in range(n_boundary, X.shape[0]):
             if not movable[i] or ptr[i + 1] == ptr[i]:
                 continue
+            deg = gather_star(X, triangles, ptr, idx, i, buf)
             tx, ty = _odt_target(X, triangles, ptr, idx, h, i)
-            before, mean = star_stats(X, triangles, ptr, idx, i, X[i, 0], X[i, 1])
+            before, mean = gathered_stats(buf, deg, X[i, 0], X[i, 1])
             need = max(min(before, floor), 0.0)
             for step in STEPS:
                 px = X[i, 0] + step * (tx - X[i, 0])
                 py = X[i, 1] + step * (ty - X[i, 1])
                 if px == X[i, 0] and py == X[i, 1]:
                     break
-                q, m = star_stats(X, triangles, ptr, idx, i, px, py)
+                q, m = gathered_stats(buf, deg, px, py)
                 if q > 0.0 and q >= need and m > mean:
                     largest = max(largest, np.hypot(px - X[i, 0], py - X[i, 1]) / h[i])
                     X[i, 0] = px
@@ -87,35 +90,104 @@ def odt_smooth(X, triangles, ptr, idx, h, n_boundary, sweeps, movable, floor, to
 
 
 @njit(cache=True)
-def mean_polish(X, triangles, ptr, idx, n_boundary, sweeps, movable, floor, halvings, below):
-    """Compass search on the star's mean radius ratio: from a tenth of the
-    shortest incident edge, 8 directions, halved ``halvings`` times; a step is
-    taken if the star's mean grows and its minimum stays at least min(its
-    value before, ``floor``) (exact orientation as in :func:`odt_smooth`).
-    Only stars whose mean is below ``below`` are searched.  ``sweeps``
+def _mean_gradient(buf, deg, px, py):
+    """Gradient of the sum of the star's radius ratios at (px, py) (a star from
+    :func:`gather_star`): grad rho = rho (2 grad A / A - (grad b + grad c) / (a + b + c)
+    - grad b / b - grad c / c), with b = |pv|, c = |pu| and A twice the area."""
+    gx = 0.0
+    gy = 0.0
+    for e in range(deg):
+        ux, uy, vx, vy, a = buf[e, 0], buf[e, 1], buf[e, 2], buf[e, 3], buf[e, 4]
+        bx, by = px - vx, py - vy
+        cx, cy = px - ux, py - uy
+        b = np.sqrt(bx * bx + by * by)
+        c = np.sqrt(cx * cx + cy * cy)
+        area2 = (ux - px) * (vy - py) - (uy - py) * (vx - px)
+        if area2 <= 0.0 or b == 0.0 or c == 0.0:
+            continue
+        s = a + b + c
+        r = 4.0 * area2 * area2 / (s * a * b * c)
+        gx += r * (2.0 * (uy - vy) / area2 - (bx / b + cx / c) / s - bx / (b * b) - cx / (c * c))
+        gy += r * (2.0 * (vx - ux) / area2 - (by / b + cy / c) / s - by / (b * b) - cy / (c * c))
+    return gx, gy
+
+
+@njit(cache=True)
+def _gradient_steps(X, i, buf, deg, step, steps, need, mean):
+    """Up to ``steps`` moves of node i along the gradient of its star's mean,
+    each from ``step``, halved until taken (the guard of :func:`mean_polish`).
+    Returns (the star's mean, moves taken)."""
+    moves = 0
+    for _ in range(steps):
+        gx, gy = _mean_gradient(buf, deg, X[i, 0], X[i, 1])
+        norm = np.hypot(gx, gy)
+        if norm == 0.0:
+            break
+        s = step / norm
+        for _ in range(BACKTRACKS):
+            px = X[i, 0] + s * gx
+            py = X[i, 1] + s * gy
+            q, m = gathered_stats(buf, deg, px, py)
+            if q > 0.0 and q >= need and m > mean + 1e-12:
+                X[i, 0] = px
+                X[i, 1] = py
+                mean = m
+                moves += 1
+                break
+            s *= 0.5
+        else:
+            break
+    return mean, moves
+
+
+@njit(cache=True)
+def _compass(X, i, buf, deg, step, halvings, need, mean):
+    """Compass search of node i: 8 directions from ``step``, halved
+    ``halvings`` times, every improving step taken (the guard of
+    :func:`mean_polish`).  Returns (the star's mean, moves taken)."""
+    moves = 0
+    for _ in range(halvings):
+        for d in range(COMPASS):
+            px = X[i, 0] + step * DX[d]
+            py = X[i, 1] + step * DY[d]
+            q, m = gathered_stats(buf, deg, px, py)
+            if q > 0.0 and q >= need and m > mean + 1e-12:
+                X[i, 0] = px
+                X[i, 1] = py
+                mean = m
+                moves += 1
+        step *= 0.5
+    return mean, moves
+
+
+@njit(cache=True)
+def mean_polish(X, triangles, ptr, idx, n_boundary, sweeps, movable, floor, halvings, below,
+                steps=0):
+    """Raise each star's mean radius ratio: up to ``steps`` steps along its
+    gradient, and where none is taken (the smallest ratio binds, or there
+    is no slope) a compass search, 8 directions halved ``halvings`` times.
+    Both start from a tenth of the shortest incident edge; a step is taken
+    if the star's mean grows and its minimum stays at least min(its value
+    before, ``floor``) (exact orientation as in :func:`odt_smooth`).  Only
+    stars whose mean is below ``below`` are searched.  ``sweeps``
     Gauss-Seidel sweeps; X in place.  Returns the steps taken."""
     taken = 0
+    buf = star_buffer(ptr)
     for _ in range(sweeps):
         moved = 0
         for i in range(n_boundary, X.shape[0]):
             if not movable[i] or ptr[i + 1] == ptr[i]:
                 continue
-            worst, mean = star_stats(X, triangles, ptr, idx, i, X[i, 0], X[i, 1])
+            deg = gather_star(X, triangles, ptr, idx, i, buf)
+            worst, mean = gathered_stats(buf, deg, X[i, 0], X[i, 1])
             if mean >= below:
                 continue
             need = max(min(worst, floor), 0.0)
             step = 0.1 * shortest_edge(X, triangles, ptr, idx, i)
-            for _ in range(halvings):
-                for d in range(COMPASS):
-                    px = X[i, 0] + step * DX[d]
-                    py = X[i, 1] + step * DY[d]
-                    q, m = star_stats(X, triangles, ptr, idx, i, px, py)
-                    if q > 0.0 and q >= need and m > mean + 1e-12:
-                        X[i, 0] = px
-                        X[i, 1] = py
-                        mean = m
-                        moved += 1
-                step *= 0.5
+            mean, moves = _gradient_steps(X, i, buf, deg, step, steps, need, mean)
+            if moves == 0:
+                mean, moves = _compass(X, i, buf, deg, step, halvings, need, mean)
+            moved += moves
         taken += moved
         if moved == 0:
             break

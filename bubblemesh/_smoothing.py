@@ -31,7 +31,12 @@ COMPASS_HALVINGS = 6
 def rho(ax, ay, bx, by, cx, cy):
     """Eq. 10 radius ratio 2 r_in / r_circ = 4 (2A)^2 / ((a + b + c) a b c);
     0 for a triangle that is not counter-clockwise in floating point."""
-    a = math.sqrt((bx - cx) ** 2 + (by - cy) ** 2)
+    return rho_opposite(ax, ay, bx, by, cx, cy, math.sqrt((bx - cx) ** 2 + (by - cy) ** 2))
+
+
+@njit(cache=True, inline="always")
+def rho_opposite(ax, ay, bx, by, cx, cy, a):
+    """:func:`rho` given a = |bc| (a star's fixed edge, computed once)."""
     b = math.sqrt((ax - cx) ** 2 + (ay - cy) ** 2)
     c = math.sqrt((ax - bx) ** 2 + (ay - by) ** 2)
     area2 = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
@@ -78,6 +83,65 @@ def star_stats(X, triangles, ptr, idx, i, px, py):
 
 
 @njit(cache=True)
+def star_buffer(ptr):
+    """Room for the largest star (see :func:`gather_star`)."""
+    most = 1
+    for i in range(ptr.shape[0] - 1):
+        most = max(most, ptr[i + 1] - ptr[i])
+    return np.empty((most, 5))
+
+
+@njit(cache=True)
+def gather_star(X, triangles, ptr, idx, i, buf):
+    """Node i's star as rows (u, v, |uv|), u and v the far corners of each
+    triangle in counter-clockwise order: the part of :func:`star_stats` that
+    does not depend on where i is.  Returns the star's size."""
+    deg = ptr[i + 1] - ptr[i]
+    for e in range(deg):
+        t = idx[ptr[i] + e]
+        k = 0 if triangles[t, 0] == i else (1 if triangles[t, 1] == i else 2)
+        u = triangles[t, (k + 1) % 3]
+        v = triangles[t, (k + 2) % 3]
+        buf[e, 0] = X[u, 0]
+        buf[e, 1] = X[u, 1]
+        buf[e, 2] = X[v, 0]
+        buf[e, 3] = X[v, 1]
+        buf[e, 4] = math.sqrt((X[u, 0] - X[v, 0]) ** 2 + (X[u, 1] - X[v, 1]) ** 2)
+    return deg
+
+
+@njit(cache=True)
+def gathered_stats(buf, deg, px, py):
+    """:func:`star_stats` on a star from :func:`gather_star` (the same bits)."""
+    worst = 1.0
+    total = 0.0
+    for e in range(deg):
+        ux, uy, vx, vy = buf[e, 0], buf[e, 1], buf[e, 2], buf[e, 3]
+        if orient2d(px, py, ux, uy, vx, vy) <= 0.0:
+            return -1.0, -1.0
+        q = rho_opposite(px, py, ux, uy, vx, vy, buf[e, 4])
+        worst = min(worst, q)
+        total += q
+    return worst, total / deg
+
+
+@njit(cache=True)
+def star_unchanged(triangles, ptr, idx, i, moved_at, seen_at):
+    """True if neither node i nor a node of its star has moved since i was
+    last looked at (visit ``seen_at[i]``; ``moved_at``: the visit of each
+    node's last move, -1 for never): looking again would find what the last
+    look did, no move.  The active set of a Gauss-Seidel sweep."""
+    if seen_at[i] < 0 or moved_at[i] >= seen_at[i]:
+        return False
+    for e in range(ptr[i], ptr[i + 1]):
+        t = idx[e]
+        for k in range(3):
+            if moved_at[triangles[t, k]] > seen_at[i]:
+                return False
+    return True
+
+
+@njit(cache=True)
 def triangle_quality(X, triangles):
     """Eq. 10 per triangle (0 for one that is not counter-clockwise)."""
     q = np.empty(triangles.shape[0])
@@ -93,11 +157,20 @@ def guarded_smooth(X, triangles, ptr, idx, n_boundary, sweeps, movable):
     ``movable[i]`` set (module docstring); X is updated in place.  Returns the
     number of moves taken."""
     taken = 0
+    buf = star_buffer(ptr)
+    moved_at = np.full(X.shape[0], -1, np.int64)
+    seen_at = np.full(X.shape[0], -1, np.int64)
+    visit = 0
     for _ in range(sweeps):
         moved = 0
         for i in range(n_boundary, X.shape[0]):
             if not movable[i] or ptr[i + 1] == ptr[i]:
                 continue
+            visit += 1
+            if star_unchanged(triangles, ptr, idx, i, moved_at, seen_at):
+                continue  # the same look as last time: no move
+            seen_at[i] = visit
+            deg = gather_star(X, triangles, ptr, idx, i, buf)
             sx = 0.0
             sy = 0.0
             for e in range(ptr[i], ptr[i + 1]):  # each neighbour twice in a closed star
@@ -109,14 +182,15 @@ def guarded_smooth(X, triangles, ptr, idx, n_boundary, sweeps, movable):
                         sy += X[v, 1]
             m = 2.0 * (ptr[i + 1] - ptr[i])
             tx, ty = sx / m, sy / m
-            before = star_stats(X, triangles, ptr, idx, i, X[i, 0], X[i, 1])[0]
+            before = gathered_stats(buf, deg, X[i, 0], X[i, 1])[0]
             for step in STEPS:
                 px = X[i, 0] + step * (tx - X[i, 0])
                 py = X[i, 1] + step * (ty - X[i, 1])
-                if star_stats(X, triangles, ptr, idx, i, px, py)[0] > before:
+                if gathered_stats(buf, deg, px, py)[0] > before:
                     X[i, 0] = px
                     X[i, 1] = py
                     moved += 1
+                    moved_at[i] = visit
                     break
         taken += moved
         if moved == 0:
@@ -142,10 +216,12 @@ def compass_polish(X, triangles, ptr, idx, n_boundary, poor, movable):
     smallest ratio is below ``poor`` (module docstring); X in place.  Returns
     the number of steps taken."""
     taken = 0
+    buf = star_buffer(ptr)
     for i in range(n_boundary, X.shape[0]):
         if not movable[i] or ptr[i + 1] == ptr[i]:
             continue
-        best = star_stats(X, triangles, ptr, idx, i, X[i, 0], X[i, 1])[0]
+        deg = gather_star(X, triangles, ptr, idx, i, buf)
+        best = gathered_stats(buf, deg, X[i, 0], X[i, 1])[0]
         if best >= poor:
             continue
         step = 0.1 * shortest_edge(X, triangles, ptr, idx, i)
@@ -157,7 +233,7 @@ def compass_polish(X, triangles, ptr, idx, n_boundary, poor, movable):
                     a = 2.0 * math.pi * d / COMPASS
                     px = X[i, 0] + step * math.cos(a)
                     py = X[i, 1] + step * math.sin(a)
-                    q = star_stats(X, triangles, ptr, idx, i, px, py)[0]
+                    q = gathered_stats(buf, deg, px, py)[0]
                     if q > best:
                         X[i, 0] = px
                         X[i, 1] = py

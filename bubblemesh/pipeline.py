@@ -18,7 +18,8 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    the §3.5 re-triangulation; then quality-guarded smoothing
    (:mod:`bubblemesh._smoothing`) alternating with re-triangulation; then
    settling: size-weighted ODT alternating with re-triangulation, valence and
-   quality edge flips, a compass search on each star's mean radius ratio.
+   quality edge flips, corner splits, gradient steps on each star's mean radius
+   ratio (a compass search where they are blocked).
    After the flips the mesh is valid and conforming (every segment an edge,
    boundary nodes unmoved) but in general no longer constrained-Delaunay.  Final
    guarantee: the result's smallest radius ratio is never below the §2
@@ -39,7 +40,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ._corners import split_corners
-from ._flips import ideal_counts, improve_flips, segment_keys
+from ._flips import delaunay_flips, ideal_counts, improve_flips, segment_keys
 from ._forces import move
 from ._inside import boundary_clearance
 from ._mesh import GenerationStats, Mesh, OptimizationStats
@@ -79,11 +80,12 @@ def _sharp_angle(target: float = 0.7) -> float:
 SHARP_ANGLE = _sharp_angle()  # ~27.2 degrees
 POOR = 0.85  # stars whose worst radius ratio is below this get the compass search
 KEEP = 0.8  # the settling passes may lower a star's worst ratio to max(mesh minimum, KEEP)
-ODT_ROUNDS, ODT_SWEEPS = 2, 6  # ODT passes, each followed by the CDT
+ODT_ROUNDS, ODT_SWEEPS = 2, 2  # ODT passes, each followed by the CDT
 FLIP_PASSES = 20
 MAX_SCALE = 1e12  # largest domain extent over the smallest size that bm.mesh takes
 HOLD = 0.5  # the share of the §3 iterations for which the frontal seeds stay put
 MEAN_SWEEPS, MEAN_HALVINGS, MEAN_BELOW = 4, 4, 1.0  # 1.0: every star
+MEAN_STEPS = 3  # gradient steps per star visit before any compass search
 
 
 class QualityWarning(UserWarning):
@@ -314,8 +316,12 @@ def _separate(X, P0):
     the origin, where floats are coarse) go back to their distinct §2
     positions; each round reverts at least one node, so it ends."""
     for _ in range(len(X)):
-        _, inverse, counts = np.unique(X, axis=0, return_inverse=True, return_counts=True)
-        shared = counts[inverse.reshape(-1)] > 1
+        order = np.lexsort((X[:, 1], X[:, 0]))  # equal points end up side by side
+        S = X[order]
+        same = (S[1:, 0] == S[:-1, 0]) & (S[1:, 1] == S[:-1, 1])
+        shared = np.zeros(len(X), dtype=bool)
+        shared[order[1:][same]] = True
+        shared[order[:-1][same]] = True
         back = shared & np.any(X != P0, axis=1)
         if not back.any():
             return
@@ -331,8 +337,15 @@ def _triangulate(X, segments):
 
 def _retriangulate_unless_worse(X, segments, triangles, neighbors):
     """The CDT of the moved nodes, unless it lowers the smallest radius ratio
-    (then the current connectivity stays: valid, since every move kept it so)."""
-    tri, nbr = _triangulate(X, segments)
+    (then the current connectivity stays: valid, since every move kept it so).
+    The CDT comes from Lawson's flips on the current, valid connectivity (the
+    nodes moved a little, so few edges flip); a full CDT if they run long."""
+    tri, nbr = np.array(triangles), np.array(neighbors)
+    flips = delaunay_flips(X, tri, nbr, segment_keys(segments, len(X)), 4 * len(tri))
+    if flips == 0:
+        return triangles, neighbors  # already the CDT
+    if flips < 0:
+        tri, nbr = _triangulate(X, segments)
     if triangle_quality(X, tri).min() >= triangle_quality(X, triangles).min():
         return tri, nbr
     return triangles, neighbors
@@ -368,9 +381,9 @@ def _settle(X, triangles, neighbors, segments, n_b, h, movable):
     KEEP)); X in place): ODT (:mod:`bubblemesh._odt`) alternating with the CDT,
     then valence and quality flips (:mod:`bubblemesh._flips`; the mesh stays
     valid and conforming but need not be constrained-Delaunay) and corner
-    splits (:mod:`bubblemesh._corners`), then a compass
-    search on each star's mean ratio.  Returns (triangles, neighbors, moves,
-    flips)."""
+    splits (:mod:`bubblemesh._corners`), then gradient steps on each star's
+    mean ratio (a compass search where they are blocked).  Returns (triangles,
+    neighbors, moves, flips)."""
     moves = 0
     for _ in range(ODT_ROUNDS):
         floor = max(float(triangle_quality(X, triangles).min(initial=1.0)), KEEP)
@@ -392,7 +405,7 @@ def _settle(X, triangles, neighbors, segments, n_b, h, movable):
     ptr, idx = stars(triangles, len(X))
     floor = max(float(triangle_quality(X, triangles).min(initial=1.0)), KEEP)
     moves += mean_polish(X, triangles, ptr, idx, n_b, MEAN_SWEEPS, movable, floor,
-                         MEAN_HALVINGS, MEAN_BELOW)
+                         MEAN_HALVINGS, MEAN_BELOW, MEAN_STEPS)
     return triangles, neighbors, moves, int(flips)
 
 

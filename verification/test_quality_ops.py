@@ -13,6 +13,7 @@ import os
 import subprocess
 import sys
 import warnings
+from fractions import Fraction
 
 import numpy as np
 import oracles as O
@@ -24,9 +25,9 @@ from test_pipeline import corner_domains
 import bubblemesh as bm
 from bubblemesh import pipeline
 from bubblemesh._corners import split_corners
-from bubblemesh._flips import ideal_counts, improve_flips, segment_keys
+from bubblemesh._flips import delaunay_flips, ideal_counts, improve_flips, segment_keys
 from bubblemesh._odt import mean_polish, odt_smooth
-from bubblemesh._smoothing import stars
+from bubblemesh._smoothing import gather_star, gathered_stats, guarded_smooth, star_buffer, stars
 from bubblemesh.generation import generate_sized
 from bubblemesh.refinement import refine_boundary
 from bubblemesh.sizing import SizeField
@@ -140,8 +141,8 @@ def test_a_corner_split_gives_a_wide_corner_its_second_triangle():
     assert O.radius_ratio_reference(X, tri).min() > before + 0.1
 
 
-@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
-def test_odt_and_mean_polish_never_lower_the_minimum_nor_invert(loops, seed):
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1), st.sampled_from([0, 3]))
+def test_odt_and_mean_polish_never_lower_the_minimum_nor_invert(loops, seed, steps):
     m, field = _sized(loops, 0.2)
     X = np.array(m.points)
     tri = np.array(m.triangles)
@@ -154,13 +155,80 @@ def test_odt_and_mean_polish_never_lower_the_minimum_nor_invert(loops, seed):
     mid = O.radius_ratio_reference(X, tri).min()
     assert mid >= before * (1 - 1e-12)
     mean_before = O.radius_ratio_reference(X, tri).mean()
-    mean_polish(X, tri, ptr, idx, m.n_boundary, 2, movable, mid, 3, 1.0)
+    mean_polish(X, tri, ptr, idx, m.n_boundary, 2, movable, mid, 3, 1.0, steps)
     O.check_valid(X, tri)
     q = O.radius_ratio_reference(X, tri)
     assert q.min() >= before * (1 - 1e-12)
     assert q.mean() >= mean_before - 1e-12  # each step raises its star's mean
     np.testing.assert_array_equal(X[~movable], np.asarray(m.points)[~movable])
     np.testing.assert_array_equal(X[: m.n_boundary], np.asarray(m.points)[: m.n_boundary])
+
+
+@given(corner_domains(max_holes=2), st.integers(0, 2**32 - 1))
+def test_delaunay_flips_turn_a_valid_mesh_into_the_constrained_delaunay_one(loops, seed):
+    """Nodes moved validly (guarded smoothing) and edges flipped away from
+    Delaunay (quality flips, relaxed): Lawson's flips must give a valid,
+    conforming, constrained-Delaunay mesh (exact oracle), the very triangles
+    of bm.constrained_delaunay when that one is unique."""
+    m, _ = _sized(loops, 0.2)
+    X = np.array(m.points)
+    tri, nbr = np.array(m.triangles), np.array(m.neighbors)
+    rng = np.random.default_rng(seed)
+    ptr, idx = stars(tri, len(X))
+    guarded_smooth(X, tri, ptr, idx, m.n_boundary, 2, rng.random(len(X)) < 0.8)
+    keys = segment_keys(np.asarray(m.segments), len(X))
+    improve_flips(X, tri, nbr, keys, np.full(len(X), 1), 3, 0.0)  # valences pushed off
+    delaunay_flips(X, tri, nbr, keys, 4 * len(tri))
+    O.check_valid(X, tri, nbr)
+    O.check_conforming(X, tri, m.segments, area=m.domain.area, rel=1e-9)
+    O.check_constrained_delaunay(X, tri, m.segments)
+    if O.delaunay_is_unique(X, tri, m.segments):
+        ref, _ = bm.constrained_delaunay(X, m.segments)
+        assert O.canonical_triangles(tri) == O.canonical_triangles(ref)
+
+
+def test_delaunay_flips_stop_at_their_bound():
+    """A square split along the wrong diagonal needs one flip: with a bound of
+    0 the kernel reports -1 and leaves the mesh as it was."""
+    X = np.array([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.1, 0.9)])
+    tri = np.array([[0, 1, 2], [0, 2, 3]])
+    nbr = np.array([[-1, 1, -1], [-1, -1, 0]])
+    keys = segment_keys(np.array([[0, 1], [1, 2], [2, 3], [3, 0]]), 4)
+    t2, n2 = tri.copy(), nbr.copy()
+    assert delaunay_flips(X, t2, n2, keys, 0) == -1
+    np.testing.assert_array_equal(t2, tri)
+    assert delaunay_flips(X, tri, nbr, keys, 10) == 1
+    assert O.canonical_triangles(tri) == O.canonical_triangles(np.array([[0, 1, 3], [1, 2, 3]]))
+
+
+def _ccw_exact(a, b, c):
+    """Strictly counter-clockwise, in exact rational arithmetic."""
+    (ax, ay), (bx, by), (cx, cy) = ([Fraction(float(v)) for v in p] for p in (a, b, c))
+    return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax) > 0
+
+
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_a_gathered_star_rates_a_moved_node_like_the_reference(loops, seed):
+    """(smallest, mean) ratio of a star with its node moved, from the gathered
+    star, against the classical formula; -1 exactly when a triangle of the
+    star is not counter-clockwise by exact orientation."""
+    m, _ = _sized(loops, 0.2)
+    X, tri = np.asarray(m.points), np.asarray(m.triangles)
+    ptr, idx = stars(tri, len(X))
+    buf = star_buffer(ptr)
+    rng = np.random.default_rng(seed)
+    for i in rng.integers(m.n_boundary, len(X), 10) if len(X) > m.n_boundary else ():
+        deg = gather_star(X, tri, ptr, idx, int(i), buf)
+        star = tri[idx[ptr[i]:ptr[i + 1]]]
+        for p in X[i] + rng.uniform(-0.3, 0.3, (5, 2)) * m.radii[i]:
+            Y = X.copy()
+            Y[i] = p
+            worst, mean = gathered_stats(buf, deg, p[0], p[1])
+            if not all(_ccw_exact(Y[a], Y[b], Y[c]) for a, b, c in star):
+                assert (worst, mean) == (-1.0, -1.0)
+                continue
+            q = O.radius_ratio_reference(Y, star)
+            np.testing.assert_allclose([worst, mean], [q.min(), q.mean()], rtol=1e-12, atol=1e-12)
 
 
 @S.budget(15)
