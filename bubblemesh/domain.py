@@ -189,7 +189,8 @@ class Domain:
         The domain is every face the segments enclose (reached from outside
         only across a segment) minus the faces of the hole points; segments
         inside it are interior constraints, vertices on no segment free
-        points, vertices outside it left out.  ``convex_hull=True`` closes the
+        points, vertices outside it left out, a vertex strictly inside a
+        segment splits it (both pieces keep its marker).  ``convex_hull=True`` closes the
         convex hull with segments first (``-c``, marker 1); the default
         (None) does so only when the segments enclose nothing.  Segment
         markers (a boundary segment marked 0 gets 1, as in Triangle), the
@@ -236,8 +237,9 @@ class Domain:
         per constraint (default: their position plus one); ``names`` maps
         names to markers; ``holes`` are extra hole points (each removes its
         face); ``regions`` rows (x, y, attribute, max_area).  Coincident nodes
-        are merged exactly.  GeometryError for crossing segments, nodes on
-        segments and the like, naming the items.
+        are merged exactly; a node strictly inside a segment splits it, and
+        collinear overlapping segments merge (as in Triangle).  GeometryError
+        for crossing segments and the like, naming the items.
         """
         from bubblemesh._cdt import BOUNDARY, INTERIOR
 
