@@ -110,9 +110,12 @@ class Domain:
     def region_size(self, default: float | None = None):
         """The regions' max_area as a size for ``bubblemesh.mesh(domain,
         size=domain.region_size())``: a vectorised h(xy), the side of the
-        equilateral triangle of the max_area of the region holding each point
-        (a later region point wins, as in Triangle), ``default`` (the domain's
-        diameter) where no region with a max_area holds it."""
+        equilateral triangle of ``FILL`` (0.75) times the max_area of the region
+        holding each point (a later region point wins, as in Triangle), so that
+        few triangles exceed the bound that ``bubblemesh.mesh`` then enforces
+        (:mod:`bubblemesh._area_bound`); ``default`` (the domain's diameter)
+        where no region with a max_area holds it."""
+        from bubblemesh._area_bound import FILL
         from bubblemesh._mesh import _flood
         from bubblemesh._pslg import triangle_values
         from bubblemesh.triangulation import constrained_delaunay
@@ -127,7 +130,7 @@ class Domain:
             default)
         area = np.where(region >= 0, regions[np.maximum(region, 0), 3] if len(regions) else -1,
                         -1.0)
-        side = np.where(area > 0, np.sqrt(4.0 * np.abs(area) / math.sqrt(3.0)), wide)
+        side = np.where(area > 0, np.sqrt(4.0 * FILL * np.abs(area) / math.sqrt(3.0)), wide)
 
         def size(xy: np.ndarray) -> np.ndarray:
             Q = np.ascontiguousarray(np.asarray(xy, np.float64).reshape(-1, 2))

@@ -33,6 +33,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ._area_bound import bound_areas
 from ._flips import ideal_counts, improve_flips, segment_keys
 from ._forces import move
 from ._inside import boundary_clearance
@@ -217,11 +218,12 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterati
     generated = replace(generated, generation=gen)
     clock.lap("generation")
     try:
-        return stable_optimize(generated, max_iterations=int(max_iterations), tol=float(tol),
+        mesh = stable_optimize(generated, max_iterations=int(max_iterations), tol=float(tol),
                                amplification=float(amplification), alpha=float(alpha),
                                rings=int(rings), smoothing_rounds=int(smoothing_rounds),
                                smoothing_sweeps=int(smoothing_sweeps), size_field=field,
                                clock=clock)
+        return bound_areas(mesh, max_area)  # Triangle's -a, global and regional: hard bounds
     except MemoryError:  # sizes far finer than the domain's extent
         raise MeshingError("mesh: not enough memory to optimise the mesh this size field "
                            "asks for (sizes far finer than the domain)") from None
