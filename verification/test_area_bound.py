@@ -44,6 +44,19 @@ def region_of_centroids(mesh, boxes):
     return out
 
 
+@pytest.fixture
+def seen(monkeypatch):
+    """{"before": the mesh bound_areas got} for the next bm.mesh call."""
+    seen = {}
+
+    def spy(mesh, max_area=None, **kw):
+        seen["before"] = mesh
+        return bound_areas(mesh, max_area, **kw)
+
+    monkeypatch.setattr(pipeline, "bound_areas", spy)
+    return seen
+
+
 @pytest.mark.parametrize("sized", [True, False])
 def test_regional_max_area_is_a_hard_bound(sized):
     shapely = pytest.importorskip("shapely")
@@ -78,14 +91,7 @@ def test_global_max_area_is_a_hard_bound(w, h, max_area):
     assert sum(areas) == w * h - Fraction(1, 2)
 
 
-def test_the_bound_keeps_the_radius_ratio(monkeypatch):
-    seen = {}
-
-    def spy(mesh, max_area=None, **kw):
-        seen["before"] = mesh
-        return bound_areas(mesh, max_area, **kw)
-
-    monkeypatch.setattr(pipeline, "bound_areas", spy)
+def test_the_bound_keeps_the_radius_ratio(seen):
     d = two_regions()
     mesh = bm.mesh(d, size=d.region_size())
     before = seen["before"].quality()
@@ -117,3 +123,35 @@ def test_a_bound_not_reached_names_the_region():
     coarse = replace(coarse, domain=d)
     with pytest.raises(MeshingError, match=r"region 0 \(point \(1\.0, 4\.0\)\)"):
         bound_areas(coarse, rounds=1)
+
+
+def test_split_segments_keep_the_boundary_first_and_their_markers(seen):
+    d = bm.Domain.from_pslg(loops=[SQUARE], constraints=[WALL], regions=[LEFT, RIGHT],
+                            markers=[1, 5])
+    mesh = bm.mesh(d)  # the size field knows no region: the bound splits the segments
+    n_b = mesh.n_boundary
+    assert n_b > seen["before"].n_boundary
+    P = mesh.points
+    on = (P[:, 0] == 0) | (P[:, 0] == 8) | (P[:, 1] == 0) | (P[:, 1] == 8) | (P[:, 0] == 4)
+    assert np.array_equal(np.flatnonzero(on), np.arange(n_b))  # exactly on them, first
+    assert np.array_equal(mesh.domain.points, P[:n_b])
+    assert np.array_equal(mesh.domain.segments, mesh.segments)
+    assert mesh.domain.area == 64.0
+    edges, marks = mesh.boundary_edges()
+    wall = (P[edges][:, :, 0] == 4).all(axis=1)
+    assert np.all(marks[wall] == 5) and np.all(marks[~wall] == 1)
+    assert mesh.quality().min() > 0.1  # no sliver along the finely split wall
+    first = seen["before"].n_boundary  # the old boundary nodes keep their places
+    assert np.array_equal(mesh.radii[:first], seen["before"].radii[:first])
+
+
+def test_the_bounded_mesh_conforms_to_the_input_boundary():
+    verify = pytest.importorskip("bubblemesh.verify")
+    outer = np.array([(0, 0), (5, 0), (5, 3), (0, 3)], float)
+    hole = np.array([(1, 1), (2, 1), (1.5, 2)], float)
+    d = bm.Domain.from_loops([outer, hole])
+    mesh = bm.mesh(d, max_area=0.01)
+    assert max(exact_areas(mesh)) <= Fraction(0.01)
+    report = verify.check(mesh.points, mesh.triangles, d.segments, boundary_points=d.points,
+                          delaunay=False)
+    assert report.ok, report
