@@ -251,12 +251,19 @@ class Mesh:
               point_data: Mapping[str, Any] | None = None,
               cell_data: Mapping[str, Any] | None = None, **meshio_kwargs: Any) -> None:
         """Write with meshio (VTU, Gmsh .msh, XDMF, ...) as ``to_meshio`` does;
-        ``meshio_kwargs`` go to ``meshio.write``."""
+        ``meshio_kwargs`` go to ``meshio.write``.  ``.msh`` is binary Gmsh 4.1,
+        whose element data meshio and Gmsh read back on the triangle and the
+        line blocks alike (the triangles' data is NaN or 0 on the lines; the
+        triangles come back in region order); ``file_format="gmsh22"`` gives
+        Gmsh 2.2, without the triangles' data when there are line cells (meshio's
+        2.2 reader cannot split element data over two blocks)."""
         from .io import write_mesh
 
         points, cells = self._data(point_data, cell_data)
         edges, marks = self.boundary_edges()
         region = self.region_ids() + 1
+        if file_format is None and Path(path).suffix.lower() == ".msh":
+            file_format = "gmsh"
         write_mesh(path, self.points, self.triangles, point_data=points, cell_data=cells,
                    file_format=file_format, lines=(edges, marks),
                    regions=np.where(region > 0, region, 1),

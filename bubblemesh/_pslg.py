@@ -28,7 +28,19 @@ import numpy as np
 from numba import njit
 
 from ._cavity import is_ghost
-from ._cdt import INTERIOR
+from ._cdt import BOUNDARY, INTERIOR
+from ._sweep import (
+    _break_ties,
+    _incidence,
+    _insert,
+    _lexicographic_ends,
+    _neighbour,
+    _priorities,
+    _remove,
+    _replace,
+    _side,
+    precedes,
+)
 from .errors import GeometryError
 from .predicates import orient2d, out_of_range, out_of_range_message
 from .triangulation import ghost_constrained
@@ -140,16 +152,18 @@ def _checked_points(points: np.ndarray, what: str) -> np.ndarray:
 
 
 def _unique_segments(segments, markers, flags):
-    """Segments without repeats (either way) or zero-length ones; the first wins."""
+    """Segments without repeats (either way) or zero-length ones; of repeats a
+    loop segment (``BOUNDARY``) wins, then the first."""
     S = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
+    flags = np.asarray(flags, np.uint8)
     same = S[:, 0] == S[:, 1]
     if same.any():
         s = int(np.argmax(same))
         raise GeometryError(f"segment {s} joins vertex {int(S[s, 0])} to itself")
-    key = np.sort(S, axis=1)
-    _, first = np.unique(key, axis=0, return_index=True)
-    first = np.sort(first)
-    return S[first], np.asarray(markers, np.int64)[first], np.asarray(flags, np.uint8)[first]
+    order = np.lexsort((np.arange(len(S)), flags != BOUNDARY))
+    _, first = np.unique(np.sort(S, axis=1)[order], axis=0, return_index=True)
+    first = np.sort(order[first])
+    return S[first], np.asarray(markers, np.int64)[first], flags[first]
 
 
 def build(vertices, segments, markers, *, holes=(), regions=(), mode="enclosed",
@@ -159,9 +173,10 @@ def build(vertices, segments, markers, *, holes=(), regions=(), mode="enclosed",
     ``vertices`` (N, 2); ``segments`` (K, 2) vertex indices, either way;
     ``markers`` (K,) ints; ``holes`` (H, 2) points; ``regions`` (R, 4) rows
     (x, y, attribute, max_area); ``flags`` (K,) ``BOUNDARY``/``INTERIOR`` for
-    ``mode="parity"``.  Raises GeometryError for crossing or overlapping
-    segments, a vertex on a segment, duplicate vertices, a hole or region point
-    on a segment, and an empty domain."""
+    ``mode="parity"``.  A vertex strictly inside a segment splits it (as in
+    Triangle; the pieces keep the segment's marker and flag).  Raises
+    GeometryError for crossing or overlapping segments, duplicate vertices, a
+    hole or region point on a segment, and an empty domain."""
     P = _checked_points(vertices, "vertex")
     if len(P) < 3:
         raise GeometryError(f"a domain needs at least 3 vertices, got {len(P)}")
@@ -171,6 +186,7 @@ def build(vertices, segments, markers, *, holes=(), regions=(), mode="enclosed",
     if flags is None:
         flags = np.full(len(np.asarray(segments).reshape(-1, 2)), INTERIOR, np.uint8)
     S, markers, flags = _unique_segments(segments, markers, flags)
+    S, markers, flags = _unique_segments(*split_at_vertices(P, S, markers, flags))
     if mode == "enclosed":
         flags = np.full(len(S), INTERIOR, np.uint8)  # every segment blocks the eating
     tri, nbr, con, ntri = ghost_constrained(P, np.ascontiguousarray(S), flags)
@@ -196,6 +212,109 @@ def build(vertices, segments, markers, *, holes=(), regions=(), mode="enclosed",
     if not keep.any():
         raise GeometryError("the segments and holes leave no domain: no triangle is enclosed")
     return _assemble(P, S, markers, tri, nbr, con, keep, holes, regions)
+
+
+@njit(cache=True)
+def _through(points, low, high, left, right, root, q):
+    """Some segment of the treap whose line holds node q (exact), -1 if none."""
+    w = root
+    while w >= 0:
+        side = _side(points, low, high, w, points[q, 0], points[q, 1])
+        if side == 0:
+            return w
+        w = right[w] if side > 0 else left[w]
+    return -1
+
+
+@njit(cache=True)
+def _split_kernel(points, segments, node_order):
+    """(segment, vertex) pairs, in sweep order, of every vertex strictly inside a
+    segment, and a status: 0 done, 2 the sweep met segments that cross (the
+    constrained triangulation then names them).
+
+    The sweep of :mod:`bubblemesh._sweep` over all vertices: at each vertex q,
+    the segments ending at q leave, those whose line holds q (a contiguous run
+    of the bottom-to-top treap) are split there (their low end moves to q: the
+    rest of the segment keeps its place), then those starting at q enter.  Of
+    collinear segments leaving q only the longest stays in the treap; the
+    others lie on it, so it is split at their far ends: overlaps become
+    repeated pieces."""
+    n_seg = segments.shape[0]
+    low, high = _lexicographic_ends(points, segments)
+    first, at = _incidence(points.shape[0], segments)
+    priority = _priorities(n_seg)
+    left = np.full(n_seg, -1, np.int64)
+    right = np.full(n_seg, -1, np.int64)
+    parent = np.full(n_seg, -1, np.int64)
+    in_tree = np.zeros(n_seg, np.bool_)
+    capacity = 3 * points.shape[0] + 8  # a planar graph has < 3 V edges
+    split_seg = np.empty(capacity, np.int64)
+    split_node = np.empty(capacity, np.int64)
+    count = 0
+    root = -1
+    for q in node_order:
+        for k in range(first[q], first[q + 1]):
+            t = at[k]
+            if high[t] == q and in_tree[t]:
+                root = _remove(t, left, right, parent, priority, root)
+                in_tree[t] = False
+        w = _through(points, low, high, left, right, root, q)
+        if w >= 0:
+            for towards_right in (False, True):
+                s = w if not towards_right else _neighbour(w, left, right, parent, True)
+                while s >= 0 and _side(points, low, high, s, points[q, 0], points[q, 1]) == 0:
+                    if precedes(points, low[s], q):  # not a duplicate of its end
+                        if count == capacity:
+                            return split_seg[:count], split_node[:count], 2
+                        split_seg[count], split_node[count] = s, q
+                        count += 1
+                        low[s] = q
+                    s = _neighbour(s, left, right, parent, towards_right)
+        for k in range(first[q], first[q + 1]):
+            s = at[k]
+            if low[s] != q or high[s] == q:
+                continue
+            root, w = _insert(points, low, high, left, right, parent, priority, root, s)
+            if w < 0:
+                in_tree[s] = True
+            elif low[w] != q:  # q on w but w not split there: the order is broken
+                return split_seg[:count], split_node[:count], 2
+            elif precedes(points, high[w], high[s]):  # collinear from q, s reaches further
+                root = _replace(w, s, left, right, parent, priority, root)
+                in_tree[w], in_tree[s] = False, True
+            # else s lies on w, which is split at s's far end when the sweep gets there
+    return split_seg[:count], split_node[:count], 0
+
+
+def split_at_vertices(P, S, markers, flags):
+    """Segments split at every vertex strictly inside them, exactly, O(n log n):
+    (segments, markers, flags), a split segment's first piece in its place and
+    the others appended, each piece with its segment's marker and flag
+    (collinear overlapping segments become repeated pieces)."""
+    if S.size and (S.min() < 0 or S.max() >= len(P)):
+        raise GeometryError("a segment refers to a vertex index out of range")
+    if not len(S):
+        return S, markers, flags
+    node_order = np.argsort(P[:, 0], kind="stable")
+    _break_ties(P, node_order)
+    seg, node, _ = _split_kernel(P, np.ascontiguousarray(S), node_order)
+    if not len(seg):
+        return S, markers, flags
+    low, high = _lexicographic_ends(P, S)
+    order = np.argsort(seg, kind="stable")  # each segment's splits in sweep order
+    seg, node = seg[order], node[order]
+    starts = np.r_[True, seg[1:] != seg[:-1]]
+    ends = np.r_[seg[1:] != seg[:-1], True]
+    prev = np.where(starts, low[seg], np.r_[-1, node[:-1]])
+    pieces = np.vstack([np.column_stack([prev, node]),
+                        np.column_stack([node[ends], high[seg[ends]]])])
+    owner = np.concatenate([seg, seg[ends]])
+    out = S.copy()
+    out[seg[starts]] = pieces[:len(seg)][starts]
+    rest = np.ones(len(pieces), bool)
+    rest[np.flatnonzero(starts)] = False
+    return (np.vstack([out, pieces[rest]]), np.concatenate([markers, markers[owner[rest]]]),
+            np.concatenate([flags, flags[owner[rest]]]))
 
 
 def _close_hull(tri, nbr, con, ghost, S, markers, hull_marker):

@@ -110,9 +110,12 @@ class Domain:
     def region_size(self, default: float | None = None):
         """The regions' max_area as a size for ``bubblemesh.mesh(domain,
         size=domain.region_size())``: a vectorised h(xy), the side of the
-        equilateral triangle of the max_area of the region holding each point
-        (a later region point wins, as in Triangle), ``default`` (the domain's
-        diameter) where no region with a max_area holds it."""
+        equilateral triangle of ``FILL`` (0.75) times the max_area of the region
+        holding each point (a later region point wins, as in Triangle), so that
+        few triangles exceed the bound that ``bubblemesh.mesh`` then enforces
+        (:mod:`bubblemesh._area_bound`); ``default`` (the domain's diameter)
+        where no region with a max_area holds it."""
+        from bubblemesh._area_bound import FILL
         from bubblemesh._mesh import _flood
         from bubblemesh._pslg import triangle_values
         from bubblemesh.triangulation import constrained_delaunay
@@ -127,7 +130,7 @@ class Domain:
             default)
         area = np.where(region >= 0, regions[np.maximum(region, 0), 3] if len(regions) else -1,
                         -1.0)
-        side = np.where(area > 0, np.sqrt(4.0 * np.abs(area) / math.sqrt(3.0)), wide)
+        side = np.where(area > 0, np.sqrt(4.0 * FILL * np.abs(area) / math.sqrt(3.0)), wide)
 
         def size(xy: np.ndarray) -> np.ndarray:
             Q = np.ascontiguousarray(np.asarray(xy, np.float64).reshape(-1, 2))
@@ -189,7 +192,8 @@ class Domain:
         The domain is every face the segments enclose (reached from outside
         only across a segment) minus the faces of the hole points; segments
         inside it are interior constraints, vertices on no segment free
-        points, vertices outside it left out.  ``convex_hull=True`` closes the
+        points, vertices outside it left out, a vertex strictly inside a
+        segment splits it (both pieces keep its marker).  ``convex_hull=True`` closes the
         convex hull with segments first (``-c``, marker 1); the default
         (None) does so only when the segments enclose nothing.  Segment
         markers (a boundary segment marked 0 gets 1, as in Triangle), the
@@ -236,8 +240,9 @@ class Domain:
         per constraint (default: their position plus one); ``names`` maps
         names to markers; ``holes`` are extra hole points (each removes its
         face); ``regions`` rows (x, y, attribute, max_area).  Coincident nodes
-        are merged exactly.  GeometryError for crossing segments, nodes on
-        segments and the like, naming the items.
+        are merged exactly; a node strictly inside a segment splits it, and
+        collinear overlapping segments merge (as in Triangle).  GeometryError
+        for crossing segments and the like, naming the items.
         """
         from bubblemesh._cdt import BOUNDARY, INTERIOR
 
@@ -263,21 +268,69 @@ class Domain:
             marks.append(np.full(len(pairs), k + 1 if markers is None else int(markers[k])))
             flags.append(np.full(len(pairs), BOUNDARY if is_loop else INTERIOR, np.uint8))
             base += len(line)
-        free = np.asarray(points, np.float64).reshape(-1, 2)
-        coords.append(free)
-        vertices = np.concatenate(coords) if coords else np.zeros((0, 2))
-        if not len(vertices) or not np.isfinite(vertices).all():
-            raise GeometryError("from_pslg: no nodes, or a non-finite coordinate")
-        unique, first, inverse = np.unique(vertices, axis=0, return_index=True,
-                                           return_inverse=True)
-        rank = np.argsort(np.argsort(first))  # unique rows in order of first occurrence
-        vertices = unique[np.argsort(first)]
-        remap = rank[inverse.reshape(-1)]
-        S = remap[np.concatenate(segs)] if segs else np.zeros((0, 2), np.int64)
+        coords.append(np.asarray(points, np.float64).reshape(-1, 2))
+        vertices, S = _merged(coords, segs, "from_pslg")
         if not len(S):
             raise GeometryError("from_pslg: give at least one loop")
         return cls._from_graph(vertices, S, np.concatenate(marks), holes, regions, names,
                                mode="parity", flags=np.concatenate(flags))
+
+    @classmethod
+    def from_geopandas(cls, frame, *, region: str | None = None, max_area: str | None = None,
+                       names: Mapping[str, int] | None = None) -> Domain:
+        """A domain from a GeoDataFrame or GeoSeries of (Multi)Polygons: a
+        partition of the plane into materials, each feature a region.
+
+        The domain is the union of the features, read as Triangle's ``-p``
+        reads a ``.poly`` file: the rings are segments, an edge two features
+        share is an interior constraint (a node of one on the other's edge
+        splits it), the holes of the union (a feature's hole no other feature
+        fills) stay holes.  Each feature gets a region point (one per polygon
+        part) with the attribute of column ``region`` (default: the feature's
+        row position) and the max_area of column ``max_area`` (default none;
+        NaN or <= 0 for none), so ``mesh.region_attributes()`` and the area
+        bounds of ``bubblemesh.mesh`` follow the features.  Markers: 1 on the
+        boundary, 2 on the interfaces (``names`` may name them).  Nothing of
+        geopandas is imported: any object with a ``geometry`` of shapely
+        polygons (and the columns) will do."""
+        try:
+            from shapely import union_all
+            from shapely.geometry import Polygon
+        except ImportError as error:
+            raise ImportError("Domain.from_geopandas needs shapely: pip install "
+                              "'bubblemesh[shapely]'") from error
+        geometry = list(getattr(frame, "geometry", frame))
+        if not geometry:
+            raise GeometryError("from_geopandas: no features")
+        attribute = (np.arange(len(geometry), dtype=np.float64) if region is None
+                     else np.asarray(frame[region], np.float64))
+        bound = (np.zeros(len(geometry)) if max_area is None
+                 else np.nan_to_num(np.asarray(frame[max_area], np.float64), nan=0.0))
+        parts, rows = [], []
+        for k, feature in enumerate(geometry):
+            mine = _polygon_parts(feature, f"feature {k}")
+            parts += mine
+            rows += [k] * len(mine)
+        loops = _rings(parts)
+        coords = list(loops)
+        segs, base = [], 0
+        for ring in loops:
+            ix = base + np.arange(len(ring))
+            segs.append(np.column_stack([ix, np.roll(ix, -1)]))
+            base += len(ring)
+        vertices, S = _merged(coords, segs, "from_geopandas")
+        union = union_all(parts)
+        holes = [p.representative_point().coords[0]
+                 for piece in _polygon_parts(union, "the union")
+                 for ring in piece.interiors
+                 for p in _polygon_parts(Polygon(ring).difference(union), "", strict=False)]
+        anchors = [part.representative_point().coords[0] for part in parts]
+        regions = np.column_stack([np.array(anchors, np.float64).reshape(-1, 2),
+                                   attribute[rows], bound[rows]])
+        domain = cls._from_graph(vertices, S, np.ones(len(S), np.int64), holes, regions, names,
+                                 mode="enclosed")
+        marks = np.where(domain.interior, 2, 1).astype(np.int64)
+        return replace(domain, segment_markers=_read_only(marks))
 
     @classmethod
     def _from_graph(cls, vertices, segments, markers, holes, regions, names, *, mode,
@@ -368,19 +421,13 @@ class Domain:
         marker n_rings + j + 1).
         """
         try:
-            from shapely.geometry import MultiPolygon, Polygon
+            import shapely  # noqa: F401
         except ImportError as error:
             raise ImportError(
                 "Domain.from_shapely needs shapely: pip install 'bubblemesh[shapely]'"
             ) from error
-        parts = list(polygon.geoms) if isinstance(polygon, MultiPolygon) else [polygon]
-        for part in parts:
-            if not isinstance(part, Polygon):
-                raise TypeError(f"expected a shapely Polygon, got {type(part).__name__}")
-        if polygon.is_empty or not parts:
-            raise GeometryError("the polygon is empty")
-        rings = [ring for part in parts for ring in (part.exterior, *part.interiors)]
-        loops = [_open_ring(np.asarray(ring.coords, dtype=np.float64)[:, :2]) for ring in rings]
+        parts = _polygon_parts(polygon, "the polygon")
+        loops = _rings(parts)
         lines = [np.asarray(g.coords, dtype=np.float64)[:, :2] for g in _geoms(constraints)]
         if spacing is not None:
             if not (math.isfinite(spacing) and spacing > 0):
@@ -391,6 +438,45 @@ class Domain:
         if len(parts) == 1 and not lines and not len(free) and not names:
             return cls.from_loops(loops)  # as before: a polygon with holes
         return cls.from_pslg(loops=loops, constraints=lines, points=free, names=names)
+
+
+def _polygon_parts(geometry, what: str, strict: bool = True) -> list:
+    """The non-empty Polygons of a shapely Polygon or MultiPolygon; TypeError
+    for other geometries and GeometryError for an empty one, unless not
+    ``strict`` (then the Polygons among any geometry's parts, maybe none)."""
+    from shapely.geometry import MultiPolygon, Polygon
+
+    parts = list(geometry.geoms) if isinstance(geometry, MultiPolygon) or (
+        not strict and hasattr(geometry, "geoms")) else [geometry]
+    if strict:
+        for part in parts:
+            if not isinstance(part, Polygon):
+                raise TypeError(f"{what}: expected a shapely Polygon, got "
+                                f"{type(part).__name__}")
+    parts = [part for part in parts if isinstance(part, Polygon) and not part.is_empty]
+    if not parts and strict:
+        raise GeometryError(f"{what} is empty")
+    return parts
+
+
+def _rings(parts) -> list[np.ndarray]:
+    """Every ring (exterior, then interiors) of the polygons as an open (n, 2) array."""
+    return [_open_ring(np.asarray(ring.coords, dtype=np.float64)[:, :2])
+            for part in parts for ring in (part.exterior, *part.interiors)]
+
+
+def _merged(coords, segs, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """The node arrays as one, exactly coincident nodes merged (first
+    occurrence order), and the segments renumbered to it."""
+    vertices = np.concatenate(coords) if coords else np.zeros((0, 2))
+    if not len(vertices) or not np.isfinite(vertices).all():
+        raise GeometryError(f"{what}: no nodes, or a non-finite coordinate")
+    unique, first, inverse = np.unique(vertices, axis=0, return_index=True,
+                                       return_inverse=True)
+    rank = np.argsort(np.argsort(first))  # unique rows in order of first occurrence
+    remap = rank[inverse.reshape(-1)]
+    S = remap[np.concatenate(segs)] if segs else np.zeros((0, 2), np.int64)
+    return unique[np.argsort(first)], S
 
 
 def _geoms(geometry) -> list:

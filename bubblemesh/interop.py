@@ -66,12 +66,20 @@ def write_xdmf(mesh, path: str | Path) -> tuple[Path, Path]:
     return path, facets_path
 
 
-def to_pyvista(mesh) -> Any:
-    """A ``pyvista.UnstructuredGrid`` of the triangles with cell data ``region``
-    and ``radius_ratio``."""
+def to_pyvista(mesh, point_data=None, cell_data=None) -> Any:
+    """A ``pyvista.UnstructuredGrid`` of the triangles (points with z = 0, in
+    the mesh's order): point data ``radius`` and ``boundary``, cell data
+    ``radius_ratio`` and ``region`` (region index plus one, 0 for none), plus
+    any given (one value per node / per triangle)."""
     try:
         import pyvista
     except ImportError as error:
         raise ImportError("to_pyvista needs pyvista: pip install pyvista") from error
-    grid = pyvista.from_meshio(mesh.to_meshio())
+    points, cells = mesh._data(point_data, {"region": mesh.region_ids() + 1, **(cell_data or {})})
+    xyz = np.column_stack([mesh.points, np.zeros(len(mesh.points))])
+    grid = pyvista.UnstructuredGrid({pyvista.CellType.TRIANGLE: np.asarray(mesh.triangles)}, xyz)
+    for name, values in points.items():
+        grid.point_data[name] = np.asarray(values)
+    for name, values in cells.items():
+        grid.cell_data[name] = np.asarray(values)
     return grid

@@ -332,6 +332,29 @@ def _meshio():
     return meshio
 
 
+def _gmsh41_entities(n, triangles, tags, edges, marks, cells):
+    """Gmsh 4.1 blocks for meshio: the triangles of each region tag and the
+    edges of each marker as one entity each (entity tag = its rank + 1 in its
+    dimension, physical tag = the region or marker), the cell data split the
+    same way (NaN / 0 on lines) and each node's (dimension, entity)."""
+    blocks, data = [], {name: [] for name in cells}
+    physical, geometrical = [], []
+    dim_tags = np.zeros((n, 2), np.int64)
+    for kind, dim, cell, tag in (("triangle", 2, triangles, tags), ("line", 1, edges, marks)):
+        for rank, value in enumerate(np.unique(tag)):
+            pick = tag == value
+            blocks.append((kind, cell[pick]))
+            physical.append(np.full(int(pick.sum()), value, np.int32))
+            geometrical.append(np.full(int(pick.sum()), rank + 1, np.int32))
+            dim_tags[cell[pick].ravel()] = (dim, rank + 1)  # a node on a line: the curve's
+            for name, (values,) in cells.items():
+                values = np.asarray(values)
+                data[name].append(values[pick] if kind == "triangle" else np.full(
+                    int(pick.sum()), np.nan if values.dtype.kind == "f" else 0, values.dtype))
+    data.update({"gmsh:physical": physical, "gmsh:geometrical": geometrical})
+    return blocks, data, dim_tags
+
+
 def read_meshio(path: str | Path, file_format: str | None = None) -> Any:
     """``meshio.read`` without its side effects: a file no reader accepts (meshio
     prints and exits) or a reader's own error is a :class:`MeshFileError`."""
@@ -442,6 +465,9 @@ def write_mesh(
     cell type per file, as dolfinx reads it; ``bubblemesh.interop.write_xdmf``
     writes the facets beside it).
 
+    ``file_format="gmsh"`` writes binary Gmsh 4.1 with every cell datum on
+    every block (lines get NaN, or 0 for integer data): one surface entity per
+    region, one curve entity per marker, so the triangles come in region order.
     ``.msh`` is written as binary Gmsh 2.2 (the most widely read version) and
     XDMF with its data inline as XML (one file, no ``.h5`` beside it); pass
     ``file_format`` (a meshio format name) to choose otherwise.  Points are
@@ -466,7 +492,14 @@ def write_mesh(
         cells.setdefault("gmsh:physical", [tags])
         cells.setdefault("gmsh:geometrical", [tags])
     field_data = {}
-    if lines is not None and len(lines[0]) and file_format != "xdmf":
+    point_data = {name: np.asarray(v) for name, v in (point_data or {}).items()}
+    if file_format == "gmsh":
+        edges, marks = (np.zeros((0, 2), np.int64), np.zeros(0, np.int32)) if lines is None \
+            else (np.asarray(lines[0], np.int64), np.asarray(lines[1], np.int32))
+        blocks, cells, point_data["gmsh:dim_tags"] = _gmsh41_entities(
+            len(points), triangles, tags, edges, marks, cells)
+        field_data = {name: np.array([marker, 1]) for name, marker in (names or {}).items()}
+    elif lines is not None and len(lines[0]) and file_format != "xdmf":
         edges, marks = np.asarray(lines[0], np.int64), np.asarray(lines[1], np.int32)
         blocks.append(("line", edges))
         if file_format == "gmsh22":  # meshio's Gmsh 2.2 reader splits other element data wrongly
@@ -480,7 +513,7 @@ def write_mesh(
     mesh = meshio.Mesh(
         points3,
         blocks,
-        point_data={name: np.asarray(v) for name, v in (point_data or {}).items()},
+        point_data=point_data,
         cell_data=cells,
         field_data=field_data,
     )

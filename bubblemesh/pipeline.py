@@ -39,6 +39,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ._area_bound import FILL, bound_areas
 from ._corners import split_corners
 from ._flips import delaunay_flips, ideal_counts, improve_flips, segment_keys
 from ._forces import move
@@ -157,14 +158,11 @@ def _sharp_corner_warnings(domain: Domain) -> tuple[str, ...]:
     return tuple(out)
 
 
-MAX_AREA_FILL = 0.65
-
-
 def _user_size(size, max_area):
     """The user size as a number, a callable or None: ``size`` combined by min
-    with the side of the equilateral triangle of area MAX_AREA_FILL times
-    ``max_area`` (the areas spread about +-35% around the field's, so that
-    mean keeps nearly every triangle below the bound)."""
+    with the side of the equilateral triangle of area FILL times ``max_area``
+    (the areas spread about +-35% around the field's, so that mean keeps
+    nearly every triangle below the bound; the bound pass splits the rest)."""
     if max_area is None:
         return size
     try:
@@ -174,13 +172,26 @@ def _user_size(size, max_area):
                         f"{type(max_area).__name__}") from None
     if not (math.isfinite(area) and area > 0):
         raise ValueError(f"mesh: max_area must be finite and > 0, got {max_area!r}")
-    side = math.sqrt(4.0 * MAX_AREA_FILL * area / math.sqrt(3.0))
+    side = math.sqrt(4.0 * FILL * area / math.sqrt(3.0))
     if size is None:
         return side
     if callable(size):
         user = as_size_function(size)
         return lambda xy: np.minimum(user(xy), side)
     return min(float(as_size_function(size)(np.zeros((1, 2)))[0]), side)
+
+
+def _with_regions(domain, user):
+    """The user size combined by min with the regions' max_area sizes
+    (:meth:`Domain.region_size`), as Triangle applies them with -a."""
+    regions = domain.regions
+    if regions is None or not (np.asarray(regions)[:, 3] > 0).any():
+        return user
+    regional = domain.region_size()
+    if user is None:
+        return regional
+    own = as_size_function(user)
+    return lambda xy: np.minimum(own(xy), regional(xy))
 
 
 def _check(name, value, ok, expected):
@@ -209,7 +220,8 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterati
                              f"got {value!r}")
     clock = PhaseClock()
     try:
-        field = SizeField.from_domain(domain, size=_user_size(size, max_area),
+        field = SizeField.from_domain(domain, size=_with_regions(domain,
+                                                                 _user_size(size, max_area)),
                                       gradation=gradation)
         _check_scale(domain, field)
         refined = refine_boundary(domain, field)
@@ -238,11 +250,12 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterati
     generated = replace(generated, generation=gen)
     clock.lap("generation")
     try:
-        return stable_optimize(generated, max_iterations=int(max_iterations), tol=float(tol),
+        mesh = stable_optimize(generated, max_iterations=int(max_iterations), tol=float(tol),
                                amplification=float(amplification), alpha=float(alpha),
                                rings=int(rings), smoothing_rounds=int(smoothing_rounds),
                                smoothing_sweeps=int(smoothing_sweeps), size_field=field,
                                clock=clock)
+        return bound_areas(mesh, max_area)  # Triangle's -a, global and regional: hard bounds
     except MemoryError:  # sizes far finer than the domain's extent
         raise MeshingError("mesh: not enough memory to optimise the mesh this size field "
                            "asks for (sizes far finer than the domain)") from None

@@ -160,6 +160,127 @@ def test_crossing_constraints_are_refused():
         bm.Domain.from_pslg(loops=[SQUARE], constraints=[[(1, 1), (7, 7)], [(1, 7), (7, 1)]])
 
 
+def test_a_vertex_at_the_crossing_splits_both_constraints():
+    cross = [[(1, 1), (7, 7)], [(1, 7), (7, 1)]]
+    d = bm.Domain.from_pslg(loops=[SQUARE], constraints=cross, points=[(4, 4)])
+    mesh = bm.mesh(d, size=1.0)
+    assert_valid(mesh, 64.0)
+    for a in [(1, 1), (7, 7), (1, 7), (7, 1)]:
+        assert_chain(mesh.points, mesh.triangles, a, (4, 4))
+
+
+def test_overlapping_collinear_constraints_are_merged():
+    d = bm.Domain.from_pslg(loops=[SQUARE], constraints=[[(2, 4), (6, 4)], [(4, 4), (7, 4)],
+                                                         [(0, 2), (3, 2)]])
+    T, _ = bm.constrained_delaunay(d.points, d.segments)
+    at = {tuple(p): i for i, p in enumerate(d.points.tolist())}
+    edges = mesh_edges(T)
+    for a, b in [((2, 4), (4, 4)), ((4, 4), (6, 4)), ((6, 4), (7, 4))]:
+        assert tuple(sorted((at[a], at[b]))) in edges
+    walls = set(map(tuple, np.sort(d.segments, axis=1).tolist()))
+    assert tuple(sorted((at[(2, 4)], at[(6, 4)]))) not in walls
+    # (0, 2) lies on the outer loop: the piece below it is still a loop edge
+    assert d.area == 64.0 and int((~d.interior).sum()) == 5
+
+
+def write_square_poly(path, midpoint_first=False):
+    """A .poly square whose bottom side (marker 3) is one segment, its midpoint
+    a vertex of no segment; the other sides have marker 1."""
+    corners = [(0, 0), (8, 0), (8, 8), (0, 8)]
+    vertices = [(4, 0)] + corners if midpoint_first else corners + [(4, 0)]
+    at = {v: i + 1 for i, v in enumerate(vertices)}
+    sides = [((0, 0), (8, 0), 3), ((8, 0), (8, 8), 1), ((8, 8), (0, 8), 1), ((0, 8), (0, 0), 1)]
+    lines = [f"{len(vertices)} 2 0 0"] + [f"{i + 1} {x} {y}" for i, (x, y) in enumerate(vertices)]
+    lines += ["4 1"] + [f"{k + 1} {at[a]} {at[b]} {m}" for k, (a, b, m) in enumerate(sides)]
+    lines += ["0"]
+    path.write_text("\n".join(lines) + "\n")
+
+
+@pytest.mark.parametrize("midpoint_first", [False, True])
+def test_a_vertex_on_a_segment_splits_it_and_keeps_the_marker(tmp_path, midpoint_first):
+    path = tmp_path / "split.poly"
+    write_square_poly(path, midpoint_first)
+    for d in (bm.Domain.from_poly(path),
+              bm.Domain.from_pslg(loops=[SQUARE], points=[(4, 0)], markers=[3])):
+        assert d.area == 64.0
+        for mesh in (bm.generate(d), bm.mesh(d, size=1.5)):
+            assert_valid(mesh, 64.0)
+            at = {tuple(p): i for i, p in enumerate(mesh.points.tolist())}
+            assert (4.0, 0.0) in at
+            assert_chain(mesh.points, mesh.triangles, (0, 0), (4, 0))
+            assert_chain(mesh.points, mesh.triangles, (4, 0), (8, 0))
+            edges, marks = mesh.boundary_edges()
+            bottom = (mesh.points[edges][:, :, 1] == 0.0).all(axis=1)
+            assert bottom.sum() >= 2
+            assert np.all(marks[bottom] == 3)
+            if 1 in d.markers:  # the .poly: the other sides keep their own marker
+                assert np.all(marks[~bottom] == 1)
+        paper = bm.generate(d)  # no refinement: the two halves are exactly edges
+        at = {tuple(p): i for i, p in enumerate(paper.points.tolist())}
+        halves = {tuple(sorted((at[(0.0, 0.0)], at[(4.0, 0.0)]))),
+                  tuple(sorted((at[(4.0, 0.0)], at[(8.0, 0.0)])))}
+        assert halves <= mesh_edges(paper.triangles)
+
+
+@st.composite
+def on_segment_graphs(draw):
+    """A 64-square, a segment a-b (a loop side or an interior constraint) and
+    vertices a + j (b - a) / m strictly inside it, all with integer
+    coordinates, so exactly on it; plus free integer points."""
+    m = draw(st.integers(2, 6))
+    dx, dy = draw(st.sampled_from([(1, 0), (0, 1), (1, 1), (1, -1), (2, 1), (1, 3), (-3, 2)]))
+    step = draw(st.integers(1, 3))
+    dx, dy = dx * step, dy * step
+    lo_x, hi_x = max(1, 1 - m * dx), min(63, 63 - m * dx)
+    lo_y, hi_y = max(1, 1 - m * dy), min(63, 63 - m * dy)
+    if lo_x > hi_x or lo_y > hi_y:
+        dx, dy, lo_x, hi_x, lo_y, hi_y = 1, 0, 1, 50, 1, 50
+    ax, ay = draw(st.integers(lo_x, hi_x)), draw(st.integers(lo_y, hi_y))
+    js = draw(st.lists(st.integers(1, m - 1), min_size=1, max_size=m - 1, unique=True))
+    on = [(ax + j * dx, ay + j * dy) for j in sorted(js)]
+    a, b = (ax, ay), (ax + m * dx, ay + m * dy)
+    free = draw(st.lists(st.tuples(st.integers(1, 63), st.integers(1, 63)), max_size=6,
+                         unique=True))
+    free = [p for p in free if orient(a, b, p) != 0]  # Fractions: off the segment's line
+    return a, b, on, free
+
+
+@settings(max_examples=30, deadline=None)
+@given(on_segment_graphs())
+def test_vertices_exactly_on_a_segment_split_it(graph):
+    a, b, on, free = graph
+    box = np.array([(0, 0), (64, 0), (64, 64), (0, 64)], float)
+    d = bm.Domain.from_pslg(loops=[box], constraints=[[a, b]], points=on + free)
+    P = d.points
+    at = {tuple(p): i for i, p in enumerate(P.tolist())}
+    chain = [at[tuple(map(float, p))] for p in [a, *on, b]]
+    walls = set(map(tuple, np.sort(d.segments, axis=1).tolist()))
+    expected = {tuple(sorted(e)) for e in zip(chain[:-1], chain[1:])}
+    assert expected <= walls  # each piece a constraint ...
+    assert tuple(sorted((chain[0], chain[-1]))) not in walls  # ... not the whole segment
+    T, N = bm.constrained_delaunay(P, d.segments)
+    assert_valid(bm.Mesh(P, T, N, np.ones(len(P)), d.segments, len(P)), 4096.0)
+    assert expected <= mesh_edges(T)
+    mesh = bm.mesh(d, size=8.0)
+    assert_valid(mesh, 4096.0)
+    for u, v in zip([a, *on], [*on, b]):
+        assert_chain(mesh.points, mesh.triangles, u, v)
+
+
+def test_vertices_on_a_loop_side_split_it():
+    box = np.array([(0, 0), (64, 0), (64, 64), (0, 64)], float)
+    on = [(16, 0), (40, 0), (64, 32), (10, 54)]  # (10, 54) on the diagonal constraint
+    d = bm.Domain.from_pslg(loops=[box], constraints=[[(0, 64), (64, 0)]], points=on,
+                            markers=[2, 5])
+    assert int((~d.interior).sum()) == 7 and int(d.interior.sum()) == 2 * 2
+    mesh = bm.mesh(d, size=6.0)
+    assert_valid(mesh, 4096.0)
+    edges, marks = mesh.boundary_edges()
+    E = mesh.points[edges]
+    on_diagonal = (E.sum(axis=2) == 64.0).all(axis=1)
+    assert np.all(marks[on_diagonal] == 5) and np.all(marks[~on_diagonal] == 2)
+
+
 # --- exact constrained-Delaunay property with interior constraints ----------------
 
 
@@ -236,8 +357,8 @@ def test_msh_round_trip_keeps_markers_and_names(tmp_path):
     mesh.write(tmp_path / "m.msh")
     m = meshio.read(tmp_path / "m.msh")
     lines = [(c.data, d) for c, d in zip(m.cells, m.cell_data["gmsh:physical"])
-             if c.type == "line"]
-    data, tags = lines[0]
+             if c.type == "line"]  # Gmsh 4.1: one block per marker
+    data, tags = (np.concatenate(x) for x in zip(*lines))
     assert set(tags.tolist()) == {7, 9}
     assert {k: int(v[0]) for k, v in m.field_data.items()} == {"wall": 7, "crack": 9}
     P = m.points[:, :2]
