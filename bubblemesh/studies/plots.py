@@ -267,3 +267,30 @@ def quality_against(path, df, labels, case_labels, axis, title):
     fig.suptitle(title, fontsize=10)
     fig.tight_layout(rect=(0, 0.06, 1, 1))
     _save(fig, path)
+
+
+def quality_per_second(path, df, labels, case_labels):
+    """Mean ρ against seconds (log), one panel per case, a point per method:
+    quality per unit of time (rows with status ok and a time)."""
+    ok = df[(df["status"] == "ok") & df["seconds"].notna() & (df["seconds"] > 0)]
+    cases = list(dict.fromkeys(ok["case"]))
+    fig, axes = plt.subplots(1, max(1, len(cases)), figsize=(3.4 * max(1, len(cases)), 3.2),
+                             squeeze=False)
+    colors: dict[str, str] = {}
+    for j, case in enumerate(cases):
+        a = axes[0, j]
+        for r in ok[ok["case"] == case].itertuples():
+            (line,) = a.plot([r.seconds], [r.rho_mean], "o", ms=5, color=colors.get(r.method),
+                             label=labels.get(r.method, r.method))
+            colors.setdefault(r.method, line.get_color())
+        a.set_xscale("log")
+        a.set_title(case_labels.get(case, case), fontsize=9)
+        a.set_xlabel("seconds", fontsize=8)
+        a.tick_params(labelsize=7)
+        a.grid(True, alpha=0.3)
+    axes[0, 0].set_ylabel("mean ρ", fontsize=8)
+    handles, names = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, names, loc="lower center", ncol=min(5, len(names)), fontsize=8,
+               frameon=False)
+    fig.tight_layout(rect=(0, 0.16, 1, 1))
+    _save(fig, path)

@@ -312,6 +312,35 @@ def _bench_cell(key, v, labels):
     return str(v)
 
 
+def _quality_vs_gmsh(out: Path):
+    """The default mesher against Gmsh and Triangle at matched counts, from
+    quality_vs_gmsh.csv ([] when absent)."""
+    import pandas as pd
+
+    csv = out / "quality_vs_gmsh.csv"
+    if not csv.exists():
+        return []
+    q = pd.read_csv(csv)
+    rows = [[r["case"], r["mesher"], str(r["N"]), f"{r['N/predicted']:.2f}", f"{r['min']:.3f}",
+             f"{r['mean']:.4f}", str(r["below_0.7"]), r["wins_mean"], r["wins_min"],
+             r["wins_below_0.7"]] for r in q.to_dict("records")]
+    bm_rows = q[q["mesher"] == "bm"]
+    cases = len(bm_rows)
+    mean = int((bm_rows["wins_mean"].str.split("+").apply(lambda w: "bm" in w)).sum())
+    low = int((bm_rows["wins_min"].str.split("+").apply(lambda w: "bm" in w)).sum())
+    return [("h2", "The default mesher against Gmsh Frontal-Delaunay"),
+            ("p", "`bm.mesh` (defaults; corner-only inputs with max_area = area / 200) against "
+                  "Gmsh's Frontal-Delaunay (algorithm 6, on bm's refined boundary nodes and its "
+                  "size field, scaled until the counts match within 3% or the closest of 12 "
+                  "runs) and Triangle -pq30 (area bound tuned to the count), from "
+                  f"`python -m bubblemesh.studies.quality --out {out}` "
+                  "([quality_vs_gmsh.csv](quality_vs_gmsh.csv)). N/pred is the count over "
+                  f"what the size field predicts. bm has the best mean on {mean} of {cases} "
+                  f"domains and the best minimum on {low}."),
+            ("table", ["case", "mesher", "N", "N/pred", "min ρ", "mean ρ", "< 0.7",
+                       "best mean", "best min", "fewest < 0.7"], rows)]
+
+
 def _benchmark(out: Path):
     """The benchmark section's blocks from benchmark.csv / benchmark.json, [] when absent."""
     import json
@@ -655,6 +684,16 @@ def render_paper(study, df, out: Path, meta: dict) -> list[Path]:
         blocks += [("img", f"figures/{figs[case.name][key].name}", f"{case.label} {key}")
                    for key in ("panels", "histograms", "meshes") if key in figs.get(case.name, {})]
         blocks.append(("table", *_case_table(df, case.name, labels)))
+    from . import plots
+
+    figure = out / "figures" / "quality_per_second.png"
+    figure.parent.mkdir(parents=True, exist_ok=True)
+    plots.quality_per_second(figure, df, labels, case_labels)
+    blocks += [("h2", "Quality per unit of time"),
+               ("p", "Mean ρ of every method against its seconds (generation and, where "
+                     "there is one, optimisation; one run each, so small times are noisy)."),
+               ("img", "figures/quality_per_second.png", "mean ρ against seconds")]
+    blocks += _quality_vs_gmsh(out)
     blocks += _benchmark(out)
     steps = _laplacian_steps(study)
     blocks += [("h2", "How each method was run"), ("ul", METHOD_NOTES + ([steps] if steps else []))]
