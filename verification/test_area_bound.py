@@ -58,6 +58,7 @@ def seen(monkeypatch):
     return seen
 
 
+@pytest.mark.slow  # ~35 s each as plain Python (nojit); the bound is also checked below
 @pytest.mark.parametrize("sized", [True, False])
 def test_regional_max_area_is_a_hard_bound(sized):
     shapely = pytest.importorskip("shapely")
@@ -72,6 +73,7 @@ def test_regional_max_area_is_a_hard_bound(sized):
     assert np.array_equal(mesh.region_ids(), region)  # the new nodes keep the regions apart
 
 
+@pytest.mark.slow
 def test_global_and_regional_bounds_combine_by_min():
     shapely = pytest.importorskip("shapely")
     d = two_regions()
@@ -92,6 +94,7 @@ def test_global_max_area_is_a_hard_bound(w, h, max_area):
     assert sum(areas) == w * h - Fraction(1, 2)
 
 
+@pytest.mark.slow
 def test_the_bound_keeps_the_radius_ratio(seen):
     d = two_regions()
     mesh = bm.mesh(d, size=d.region_size())
