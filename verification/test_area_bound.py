@@ -12,7 +12,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import bubblemesh as bm
-from bubblemesh import pipeline
 import bubblemesh.pipeline as pipeline
 from bubblemesh._area_bound import bound_areas
 from bubblemesh.errors import MeshingError

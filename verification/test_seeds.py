@@ -1,12 +1,12 @@
 """Frontal seeds of bm.mesh (bubblemesh._seeds) against independent checks:
-brute-force numpy distances for the room rule, GEOS (shapely) for "inside the
-domain", and the exact oracles for the seeded §2 mesh."""
+brute-force numpy distances for the room rule, the exact point location of
+verification/oracles.py for "inside the domain", and the exact oracles for the
+seeded §2 mesh."""
 
 from __future__ import annotations
 
 import numpy as np
 import oracles as O
-import shapely
 from hypothesis import given
 from hypothesis import strategies as st
 from test_pipeline import corner_domains
@@ -53,7 +53,6 @@ def test_seeds_are_apexes_or_corner_bisectors_with_room_inside_the_domain(loops,
     P, S = np.asarray(fine.points), np.asarray(fine.segments)
     seeds, _ = frontal_seeds(P, S, fine.interior)
     owners = _owners(P, S)
-    polygon = shapely.Polygon(P[fine.loops[0]], [P[ix] for ix in fine.loops[1:]])
     mids = 0.5 * (P[S[:, 0]] + P[S[:, 1]])
     for x in seeds:
         match = [o for o in owners if np.allclose(o[0], x, rtol=0, atol=1e-12)]
@@ -63,7 +62,7 @@ def test_seeds_are_apexes_or_corner_bisectors_with_room_inside_the_domain(loops,
         assert np.hypot(*(others - x).T).min() >= ROOM * length * (1 - 1e-12)
         assert np.hypot(*(np.delete(mids, segs, axis=0) - x).T).min() >= ROOM * length * (
             1 - 1e-12)
-        assert polygon.contains(shapely.Point(x))  # GEOS: inside, off the boundary
+        assert O.domain_location(P, fine.loops, tuple(x)) > 0  # exact: inside, off the loops
     if len(seeds) > 1:
         d = np.hypot(*(seeds[:, None] - seeds[None]).T)
         np.fill_diagonal(d, np.inf)
