@@ -22,7 +22,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._flips import _flip, _is_segment
+from ._flips import _flip, _is_segment, across
 from ._smoothing import rho, stars
 from .predicates import orient2d
 
@@ -96,10 +96,7 @@ def _try_split(X, tri, nbr, keys, ptr, idx, movable, t, k):
     u = nbr[t, k]
     if u < 0 or _is_segment(keys, n, a, b):
         return False
-    m = 0
-    while m < 2 and (tri[u, m] == a or tri[u, m] == b):
-        m += 1
-    d = tri[u, m]
+    m, d = across(tri, t, k, u)
     old_t = rho(X[v, 0], X[v, 1], X[a, 0], X[a, 1], X[b, 0], X[b, 1])
     old_star = 1.0  # d's triangles, u among them: they all change if d moves
     for e in range(ptr[d], ptr[d + 1]):
@@ -158,10 +155,7 @@ def split_corners(X, tri, nbr, keys, ideal, fixed, movable):
                 continue
             a = tri[t, (k + 1) % 3]
             b = tri[t, (k + 2) % 3]
-            m = 0
-            while m < 2 and (tri[u, m] == a or tri[u, m] == b):
-                m += 1
-            d = tri[u, m]
+            _, d = across(tri, t, k, u)
             if stale[a] or stale[b] or stale[d]:
                 continue
             if _try_split(X, tri, nbr, keys, ptr, idx, movable, t, k):

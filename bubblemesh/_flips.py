@@ -66,6 +66,18 @@ def segment_keys(segments, n):
     return np.sort(keys)
 
 
+@njit(cache=True, inline="always")
+def across(tri, t, k, u):
+    """(slot m, node d) of u = nbr[t, k], the triangle across the edge of t
+    opposite its k-th node: d is u's node off that edge."""
+    a = tri[t, (k + 1) % 3]
+    b = tri[t, (k + 2) % 3]
+    m = 0
+    while m < 2 and (tri[u, m] == a or tri[u, m] == b):
+        m += 1
+    return m, tri[u, m]
+
+
 @njit(cache=True)
 def _relink(nbr, t, old, new):
     """In triangle t (if any), the neighbour ``old`` becomes ``new``."""
@@ -127,10 +139,7 @@ def improve_flips(X, tri, nbr, keys, ideal, max_passes, relax):
                 c = tri[t, k]
                 a = tri[t, (k + 1) % 3]
                 b = tri[t, (k + 2) % 3]
-                m = 0
-                while m < 2 and (tri[u, m] == a or tri[u, m] == b):
-                    m += 1
-                d = tri[u, m]
+                m, d = across(tri, t, k, u)
                 if _is_segment(keys, n, a, b):
                     continue
                 if orient2d(X[c, 0], X[c, 1], X[a, 0], X[a, 1], X[d, 0], X[d, 1]) <= 0.0:
@@ -191,10 +200,7 @@ def delaunay_flips(X, tri, nbr, keys, max_flips):
         c = tri[t, k]
         a = tri[t, (k + 1) % 3]
         b = tri[t, (k + 2) % 3]
-        m = 0
-        while m < 2 and (tri[u, m] == a or tri[u, m] == b):
-            m += 1
-        d = tri[u, m]
+        m, d = across(tri, t, k, u)
         if incircle(X[c, 0], X[c, 1], X[a, 0], X[a, 1], X[b, 0], X[b, 1],
                     X[d, 0], X[d, 1]) <= 0.0 or _is_segment(keys, n, a, b):
             continue

@@ -125,19 +125,27 @@ def _gradient_steps(X, i, buf, deg, step, steps, need, mean):
             break
         s = step / norm
         for _ in range(BACKTRACKS):
-            px = X[i, 0] + s * gx
-            py = X[i, 1] + s * gy
-            q, m = gathered_stats(buf, deg, px, py)
-            if q > 0.0 and q >= need and m > mean + 1e-12:
-                X[i, 0] = px
-                X[i, 1] = py
-                mean = m
+            taken, mean = _try_move(X, i, buf, deg, X[i, 0] + s * gx, X[i, 1] + s * gy,
+                                    need, mean)
+            if taken:
                 moves += 1
                 break
             s *= 0.5
         else:
             break
     return mean, moves
+
+
+@njit(cache=True, inline="always")
+def _try_move(X, i, buf, deg, px, py, need, mean):
+    """Move node i to (px, py) if its star stays counter-clockwise, its worst
+    ratio at least ``need`` and its mean above ``mean``: (taken, the mean)."""
+    q, m = gathered_stats(buf, deg, px, py)
+    if q > 0.0 and q >= need and m > mean + 1e-12:
+        X[i, 0] = px
+        X[i, 1] = py
+        return 1, m
+    return 0, mean
 
 
 @njit(cache=True)
@@ -148,14 +156,9 @@ def _compass(X, i, buf, deg, step, halvings, need, mean):
     moves = 0
     for _ in range(halvings):
         for d in range(COMPASS):
-            px = X[i, 0] + step * DX[d]
-            py = X[i, 1] + step * DY[d]
-            q, m = gathered_stats(buf, deg, px, py)
-            if q > 0.0 and q >= need and m > mean + 1e-12:
-                X[i, 0] = px
-                X[i, 1] = py
-                mean = m
-                moves += 1
+            taken, mean = _try_move(X, i, buf, deg, X[i, 0] + step * DX[d],
+                                    X[i, 1] + step * DY[d], need, mean)
+            moves += taken
         step *= 0.5
     return mean, moves
 

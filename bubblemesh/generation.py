@@ -58,39 +58,39 @@ def _physical_memory() -> int | None:
         return None
 
 
+def _refuse_beyond_memory(count: float, asker: str, bound: str, advice: str) -> None:
+    """MeshingError when ``count`` triangles would not fit in physical memory."""
+    memory = _physical_memory()
+    if memory is not None and count * BYTES_PER_TRIANGLE > memory:
+        raise MeshingError(
+            f"generation: {asker} asks for {bound} {count:.3g} triangles "
+            f"(~{count * BYTES_PER_TRIANGLE / 2**30:.3g} GiB, this machine has "
+            f"{memory / 2**30:.3g} GiB): {advice}")
+
+
 def _check_fits(area_geo: float, radii: np.ndarray) -> None:
     """MeshingError before allocating when even the fewest triangles eq. 6 could
     stop at (each bubble is at most pi r_max^2) do not fit in memory."""
-    fewest = area_geo / (math.pi * float(radii.max()) ** 2)
-    memory = _physical_memory()
-    if memory is not None and fewest * BYTES_PER_TRIANGLE > memory:
-        raise MeshingError(
-            f"generation: the boundary asks for at least {fewest:.3g} triangles "
-            f"(~{fewest * BYTES_PER_TRIANGLE / 2**30:.3g} GiB, this machine has "
-            f"{memory / 2**30:.3g} GiB): its spacing (largest node bubble "
-            f"{float(radii.max()):.3g}) is far finer than the domain (area {area_geo:.3g}); "
-            "coarsen the boundary or pass max_insertions")
+    _refuse_beyond_memory(
+        area_geo / (math.pi * float(radii.max()) ** 2), "the boundary", "at least",
+        f"its spacing (largest node bubble {float(radii.max()):.3g}) is far finer than the "
+        f"domain (area {area_geo:.3g}); coarsen the boundary or pass max_insertions")
 
 
-def check_field_fits(points: np.ndarray, tri: np.ndarray, size_field) -> None:
+def _check_field_fits(points: np.ndarray, tri: np.ndarray, size_field) -> None:
     """MeshingError before §2 when the triangles a size field asks for do not
     fit in memory.  The count is estimated on the initial triangulation, each
     triangle's area over the equilateral area of the largest h at its corners
     and centroid: an underestimate wherever h varies inside a triangle, so a
-    mesh that fits is never refused; a part thinner than floating point can
-    resolve (whose feature size keeps h tiny along it) is."""
+    mesh that fits is never refused."""
     corners = points[tri]
     area = 0.5 * np.abs(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]))
     samples = np.concatenate([corners, corners.mean(axis=1, keepdims=True)], axis=1)
     h = size_field(samples.reshape(-1, 2)).reshape(len(tri), 4).max(axis=1)
-    count = float(np.sum(area / (math.sqrt(3.0) / 4.0 * h * h)))
-    memory = _physical_memory()
-    if memory is not None and count * BYTES_PER_TRIANGLE > memory:
-        raise MeshingError(
-            f"generation: the size field asks for about {count:.3g} triangles "
-            f"(~{count * BYTES_PER_TRIANGLE / 2**30:.3g} GiB, this machine has "
-            f"{memory / 2**30:.3g} GiB): its sizes (smallest {float(size_field.values.min()):.3g})"
-            " are far finer than the domain; pass a larger size")
+    _refuse_beyond_memory(
+        float(np.sum(area / (math.sqrt(3.0) / 4.0 * h * h))), "the size field", "about",
+        f"its sizes (smallest {float(size_field.values.min()):.3g}) are far finer than the "
+        "domain; pass a larger size")
 
 
 def _insertion_bound(domain_area, radii):
@@ -166,7 +166,7 @@ def _generate(domain, max_insertions, progress, size_field, seeds=None):
     tri, nbr = constrained_delaunay(points, domain.segments)  # (a)
     clock.lap("boundary_cdt")
     if size_field is not None and max_insertions is None:
-        check_field_fits(points, np.asarray(tri), size_field)
+        _check_field_fits(points, np.asarray(tri), size_field)
     capped, field, factor, stack, r_field = _kernel_field(size_field)
     area_geo = float(domain.area)
     bound = _insertion_bound(area_geo, radii if not capped else

@@ -52,7 +52,7 @@ from ._smoothing import compass_polish, guarded_smooth, stars, triangle_quality
 from ._verlet import VerletLists
 from .domain import Domain
 from .errors import GeometryError, MeshingError
-from .generation import check_field_fits, generate_sized
+from .generation import generate_sized
 from .refinement import refine_boundary
 from .sizing import _EQUILATERAL_RADIUS, SizeField, as_size_function
 from .timing import PhaseClock
@@ -232,7 +232,7 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterati
     except GeometryError:  # a node an ulp off its segment touches a part a few ulps away
         fine = refined.exact_only().to_domain()
     clock.lap("sizing")
-    seeds = _frontal_seeds(fine, field)
+    seeds = _frontal_seeds(fine)
     try:
         generated = generate_sized(fine, field, progress=progress, seeds=seeds)
     except MemoryError:  # sizes far finer than the domain's extent
@@ -274,12 +274,10 @@ def _check_scale(domain, field):
                            "or split the domain, or use paper=True")
 
 
-def _frontal_seeds(domain, field):
+def _frontal_seeds(domain):
     """The first row off the walls (:mod:`bubblemesh._seeds`), those strictly
-    inside the domain.  The boundary's triangulation, built for that, first
-    tells whether the field's mesh fits in memory at all."""
+    inside the domain (by a walk in the boundary's triangulation)."""
     tri, nbr = _triangulate(np.asarray(domain.points), domain.segments)
-    check_field_fits(np.asarray(domain.points), np.asarray(tri), field)
     seeds, rows = frontal_seeds(domain.points, domain.segments, domain.interior)
     if not len(seeds):
         return None
