@@ -13,7 +13,7 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    and a node on the bisector of each corner that two triangles fit best.
 3. A stable §3: the eq. 7-8 overlap forces with the node bubbles anchored at
    their §2 radii (amplified, §3.1; eq. 9 is not applied, so radii cannot
-   drift; the frontal seeds hold still for the first HOLD of the iterations),
+   drift; the frontal seeds hold still like the boundary),
    stopped when the largest move falls below ``tol`` times the radius;
    the §3.5 re-triangulation; then quality-guarded smoothing
    (:mod:`bubblemesh._smoothing`) alternating with re-triangulation; then
@@ -84,7 +84,6 @@ KEEP = 0.8  # the settling passes may lower a star's worst ratio to max(mesh min
 ODT_ROUNDS, ODT_SWEEPS = 2, 2  # ODT passes, each followed by the CDT
 FLIP_PASSES = 20
 MAX_SCALE = 1e12  # largest domain extent over the smallest size that bm.mesh takes
-HOLD = 0.5  # the share of the §3 iterations for which the frontal seeds stay put
 MEAN_SWEEPS, MEAN_HALVINGS, MEAN_BELOW = 4, 4, 1.0  # 1.0: every star
 MEAN_STEPS = 3  # gradient steps per star visit before any compass search
 
@@ -285,13 +284,14 @@ def _frontal_seeds(domain):
 
 
 def _forces(mesh, R, max_iterations, tol, alpha, rings):
-    """Eq. 7-8 with fixed radii R until the largest relative move < tol.  For
-    the first HOLD of the iterations the frontal seeds hold still like the
-    boundary (the forces would push a seed out of its pocket between two
-    boundary nodes before the interior has settled around it).
+    """Eq. 7-8 with fixed radii R until the largest relative move < tol.  The
+    frontal seeds hold still like the boundary: released, the forces push
+    seeds out of their pockets between boundary nodes and leave boundary nodes
+    with two triangles, right-angled at best (the smoothing and settling move
+    them later, under their quality guards).
     Returns (positions, iterations, last largest move, blocked moves, builds)."""
     n_b = mesh.n_boundary
-    n_hold = n_b + int(getattr(mesh.generation, "seeds", 0))
+    fixed = n_b + int(getattr(mesh.generation, "seeds", 0))
     P0 = np.ascontiguousarray(mesh.points)
     tri0 = np.ascontiguousarray(mesh.triangles)
     nbr0 = np.ascontiguousarray(mesh.neighbors)
@@ -301,25 +301,22 @@ def _forces(mesh, R, max_iterations, tol, alpha, rings):
     home = vertex_triangles(tri0, n)
     clearance = boundary_clearance(P0, np.asarray(mesh.segments), n_b,
                                    reach=4.0 * float(R.max(initial=0.0)))
-    iterations, largest, blocked, builds = 0, 0.0, 0, 0
-    held = int(HOLD * max_iterations) if n_hold > n_b else 0
-    for fixed, limit in ((n_hold, held), (n_b, max_iterations)):
-        lists = VerletLists(ring_ptr, ring_idx, fixed, 0.3)
-        expired = True
-        while iterations < limit:
-            iterations += 1
-            if expired:
-                lists.build(X, R)
-            expired, stuck, largest = move(X, R, Xn, home, *lists.arrays, False, fixed, alpha,
-                                           P0, tri0, nbr0, clearance, lists.X0, lists.R0,
-                                           lists.skin)
-            expired = expired > 0
-            blocked += stuck
-            X, Xn = Xn, X
-            if largest < tol:
-                break
-        builds += lists.builds
-    return X, iterations, float(largest), int(blocked), builds
+    iterations, largest, blocked = 0, 0.0, 0
+    lists = VerletLists(ring_ptr, ring_idx, fixed, 0.3)
+    expired = True
+    while iterations < max_iterations:
+        iterations += 1
+        if expired:
+            lists.build(X, R)
+        expired, stuck, largest = move(X, R, Xn, home, *lists.arrays, False, fixed, alpha,
+                                       P0, tri0, nbr0, clearance, lists.X0, lists.R0,
+                                       lists.skin)
+        expired = expired > 0
+        blocked += stuck
+        X, Xn = Xn, X
+        if largest < tol:
+            break
+    return X, iterations, float(largest), int(blocked), lists.builds
 
 
 def _separate(X, P0):
