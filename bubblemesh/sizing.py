@@ -49,7 +49,7 @@ FEATURE_SLACK = 1.25  # on the boundary h <= FEATURE_SLACK * feature size
 # gaps thinner than this fraction of the local input segment length are not
 # resolved (a node an ulp from a segment would otherwise ask for sizes of ~0)
 FEATURE_FLOOR = 1e-2
-QUADTREE_SAMPLING = 1.0  # quadtree cells have sides <= QUADTREE_SAMPLING * user size
+QUADTREE_SAMPLING = 0.7  # quadtree cells have sides <= QUADTREE_SAMPLING * user size
 MAX_SOURCES = 2**24  # beyond this the requested sizes are unreasonably small
 _LEAF = 8  # items per tree leaf
 _STACK = 256  # > twice the depth of any tree over < 2**60 items
