@@ -21,7 +21,9 @@ Methods: ``bubblemesh_generate`` (§2), ``bubblemesh_optimize`` (§3 with the
 final re-triangulation) and ``bubblemesh_total`` (both), with numba's default
 threads, and ``bubblemesh_optimize_1thread`` / ``bubblemesh_total_1thread``
 with ``NUMBA_NUM_THREADS=1`` (what the parallel loops gain, or cost on a busy
-machine; not in quick mode); ``triangle``
+machine; not in quick mode); ``bubblemesh_mesh``, the default mesher
+``bm.mesh`` with the boundary spacing as its size (the same element count, in
+its own child, so its memory is its own); ``triangle``
 (:mod:`bubblemesh.studies.peers`' Triangle run, ``pq30a<A>YQ``, A tuned untimed to the §2 element
 count); ``gmsh_frontal`` (the peers' Gmsh run with ``Mesh.Algorithm=6`` and a
 uniform size tuned untimed to the same count; only up to ``GMSH_CAP`` elements, as it
@@ -36,6 +38,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import subprocess
 import sys
@@ -73,6 +76,7 @@ LABELS = {  # the methods' names in the report and the plot
     "bubblemesh_total": "bubblemesh generate + optimize",
     "bubblemesh_optimize_1thread": "bubblemesh optimize (§3), 1 thread",
     "bubblemesh_total_1thread": "bubblemesh generate + optimize, 1 thread",
+    "bubblemesh_mesh": "bubblemesh mesh (the default mesher)",
     "triangle": "Triangle pq30",
     "gmsh_frontal": "Gmsh Frontal-Delaunay",
 }
@@ -143,6 +147,29 @@ def _child_bubblemesh(n, repeats):
             opt_phases),
         row("bubblemesh_total", o, tot, peak, "generate + optimize"),
     ]  # fmt: skip
+
+
+def _child_mesh(n, repeats):
+    """bm.mesh (the default mesher) on the same disk with the size of its boundary
+    spacing, which asks for the paper pipeline's element count (C_DISK n^2)."""
+    import bubblemesh as bm
+
+    for _ in range(2):  # warm-up, as for the paper pipeline
+        bm.mesh(bm.Domain.from_loops(_disk(64)), size=2 * math.pi / 64)
+    base = _rss_mb()
+    dom = bm.Domain.from_loops(_disk(n))
+    seconds = []
+    m = None
+    for _ in range(repeats):
+        m = None  # one mesh alive at a time: the peak is one run's
+        t0 = time.perf_counter()
+        m = bm.mesh(dom, size=2 * math.pi / n)
+        seconds.append(time.perf_counter() - t0)
+    peak = _rss_mb()
+    phases = dict(m.optimization.phases)
+    return [dict(method="bubblemesh_mesh", elements=len(m.triangles), seconds=min(seconds),
+                 peak_mb=peak, peak_delta_mb=peak - base, phases=phases,
+                 note=f"size = boundary spacing; last run's phases: {_phases(phases)}")]
 
 
 PHASES = {  # bubblemesh's stats phase names, in words
@@ -257,6 +284,8 @@ def _child(spec: dict) -> list[dict]:
     m, n, r = spec["method"], spec["n_boundary"], spec["repeats"]
     if m == "bubblemesh":
         return _child_bubblemesh(n, r)
+    if m == "bubblemesh_mesh":
+        return _child_mesh(n, r)
     if m == "bubblemesh_iterations":
         return _child_iterations(n, r)
     if m == "triangle":
@@ -411,6 +440,7 @@ def check_targets(df, slopes: dict, compile_: dict) -> list[dict]:
             bool(speedup >= 5),
             "x Gmsh's speed",
         )
+    _mesh_targets(ok, at, add)
     peak = ok[ok.method == "bubblemesh_total"]
     if not peak.empty:
         row = peak.loc[peak.elements.idxmax()]
@@ -436,6 +466,32 @@ def check_targets(df, slopes: dict, compile_: dict) -> list[dict]:
             "s",
         )
     return out
+
+
+def _mesh_targets(ok, at, add):
+    """The default mesher's speed targets: against the paper pipeline (time and
+    peak memory, at 100k and 1M), Gmsh Frontal-Delaunay (100k) and Triangle (1M)."""
+    for size in (GMSH_COMPARE, 1_000_000):
+        mesh, paper = at("bubblemesh_mesh", size), at("bubblemesh_total", size)
+        if mesh is None or paper is None or abs(math.log(mesh.elements / size)) > 0.5:
+            continue
+        ratio = (mesh.seconds / mesh.elements) / (paper.seconds / paper.elements)
+        add(f"bm.mesh at {int(mesh.elements)} elements: per-element time <= 1.5x the paper "
+            "pipeline's", round(float(ratio), 2), bool(ratio <= 1.5), "x paper")
+        memory = mesh.peak_mb / paper.peak_mb
+        add(f"bm.mesh at {int(mesh.elements)} elements: peak RSS <= 1.2x the paper pipeline's",
+            round(float(memory), 2), bool(memory <= 1.2), "x paper")
+    mesh, gm = at("bubblemesh_mesh", GMSH_COMPARE), at("gmsh_frontal", GMSH_COMPARE)
+    if mesh is not None and gm is not None:
+        speedup = (gm.seconds / gm.elements) / (mesh.seconds / mesh.elements)
+        add(f"bm.mesh at {int(mesh.elements)} elements: >= 5x faster per element than Gmsh "
+            f"Frontal-Delaunay ({int(gm.elements)} elements)", round(float(speedup), 2),
+            bool(speedup >= 5), "x Gmsh's speed")
+    mesh = at("bubblemesh_mesh", 1_000_000)
+    if mesh is not None and mesh.elements >= 500_000:
+        add(f"bm.mesh at {int(mesh.elements)} elements: per-element time <= 10x Triangle's",
+            round(float(mesh.ratio_to_triangle), 2), bool(mesh.ratio_to_triangle <= 10),
+            "x Triangle")
 
 
 def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress=True, serial=True):
@@ -483,6 +539,8 @@ def main(max_elements=1_000_000, repeats=3, quick=False, out="reports", progress
             for r in one:
                 r["method"] = r["method"] + "_1thread"
             got += [r for r in one if r["method"] != "bubblemesh_generate_1thread"]
+        got += _run_child({"method": "bubblemesh_mesh", "n_boundary": n, "repeats": repeats},
+                          timeout * 3)
         got += _run_child(
             {"method": "triangle", "n_boundary": n, "repeats": repeats, "target": match}, timeout
         )
