@@ -88,11 +88,14 @@ def _bubble(P, R, tri, t, r_e, capped, field, factor, stack):
     a = unsigned(tri[t, 0])
     b = unsigned(tri[t, 1])
     c = unsigned(tri[t, 2])
-    r, ex, ey = element_radius(
-        P[a, 0], P[a, 1], R[a], P[b, 0], P[b, 1], R[b], P[c, 0], P[c, 1], R[c]
-    )
-    if capped:
+    if capped:  # the field at the centroid (eq. 3's centroid, the same bits)
+        ex = (P[a, 0] + P[b, 0] + P[c, 0]) / 3.0
+        ey = (P[a, 1] + P[b, 1] + P[c, 1]) / 3.0
         r = factor * cone_at(ex, ey, stack, *field)
+    else:
+        r = element_radius(
+            P[a, 0], P[a, 1], R[a], P[b, 0], P[b, 1], R[b], P[c, 0], P[c, 1], R[c]
+        )[0]
     r_e[t] = r
     area = triangle_area(P[a, 0], P[a, 1], P[b, 0], P[b, 1], P[c, 0], P[c, 1])
     if area == 0.0:

@@ -8,13 +8,15 @@ every incident triangle stays strictly counter-clockwise (exact
 :func:`orient2d`) and the star's smallest radius ratio (eq. 10) stays at least
 min(its value before, ``floor``): with ``floor`` the mesh's minimum the pass
 never lowers that minimum, never inverts a triangle and keeps every node
-inside its star (so inside the domain).  Gauss-Seidel in index order:
-deterministic.
+inside its star (so inside the domain).  Gauss-Seidel colour by colour, the
+nodes of a colour in parallel (:mod:`bubblemesh._colouring`): deterministic on
+any thread count.
 """
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
+from ._colouring import BLOCK, colour_classes
 from ._smoothing import gather_star, gathered_stats, shortest_edge, star_buffer
 
 STEPS = (1.0, 0.5, 0.25)
@@ -54,36 +56,55 @@ def _odt_target(X, triangles, ptr, idx, h, i):
 
 
 @njit(cache=True)
+def _odt_visit(X, triangles, ptr, idx, h, i, buf, floor):
+    """One ODT step of node i (module docstring): its move over its size, -1
+    if none is taken."""
+    deg = gather_star(X, triangles, ptr, idx, i, buf)
+    tx, ty = _odt_target(X, triangles, ptr, idx, h, i)
+    before, mean = gathered_stats(buf, deg, X[i, 0], X[i, 1])
+    need = max(min(before, floor), 0.0)
+    for step in STEPS:
+        px = X[i, 0] + step * (tx - X[i, 0])
+        py = X[i, 1] + step * (ty - X[i, 1])
+        if px == X[i, 0] and py == X[i, 1]:
+            break
+        q, m = gathered_stats(buf, deg, px, py)
+        if q > 0.0 and q >= need and m > mean:
+            moved = np.hypot(px - X[i, 0], py - X[i, 1]) / h[i]
+            X[i, 0] = px
+            X[i, 1] = py
+            return moved
+    return -1.0
+
+
+@njit(cache=True, parallel=True)
 def odt_smooth(X, triangles, ptr, idx, h, n_boundary, sweeps, movable, floor, tol):
     """``sweeps`` ODT sweeps (module docstring) over the nodes >= n_boundary
     with ``movable`` set, h the size at every node; X in place.  Stops early
     when no node moves by more than ``tol`` times its size.  Returns (moves
     taken, sweeps run)."""
+    order, colour_ptr = colour_classes(triangles, ptr, idx, n_boundary, movable)
+    most = star_buffer(ptr).shape[0]
     taken = 0
-    buf = star_buffer(ptr)
     run = 0
     for _ in range(sweeps):
         run += 1
         largest = 0.0
-        for i in range(n_boundary, X.shape[0]):
-            if not movable[i] or ptr[i + 1] == ptr[i]:
-                continue
-            deg = gather_star(X, triangles, ptr, idx, i, buf)
-            tx, ty = _odt_target(X, triangles, ptr, idx, h, i)
-            before, mean = gathered_stats(buf, deg, X[i, 0], X[i, 1])
-            need = max(min(before, floor), 0.0)
-            for step in STEPS:
-                px = X[i, 0] + step * (tx - X[i, 0])
-                py = X[i, 1] + step * (ty - X[i, 1])
-                if px == X[i, 0] and py == X[i, 1]:
-                    break
-                q, m = gathered_stats(buf, deg, px, py)
-                if q > 0.0 and q >= need and m > mean:
-                    largest = max(largest, np.hypot(px - X[i, 0], py - X[i, 1]) / h[i])
-                    X[i, 0] = px
-                    X[i, 1] = py
-                    taken += 1
-                    break
+        for c in range(colour_ptr.shape[0] - 1):
+            lo, hi = colour_ptr[c], colour_ptr[c + 1]
+            blocks = (hi - lo + BLOCK - 1) // BLOCK
+            moves = np.zeros(blocks, np.int64)
+            far = np.zeros(blocks)
+            for b in prange(blocks):
+                buf = np.empty((most, 5))
+                for j in range(lo + b * BLOCK, min(hi, lo + (b + 1) * BLOCK)):
+                    moved = _odt_visit(X, triangles, ptr, idx, h, order[j], buf, floor)
+                    if moved >= 0.0:
+                        moves[b] += 1
+                        far[b] = max(far[b], moved)
+            taken += moves.sum()
+            if blocks:
+                largest = max(largest, far.max())
         if largest < tol:
             break
     return taken, run
@@ -164,6 +185,21 @@ def _compass(X, i, buf, deg, step, halvings, need, mean):
 
 
 @njit(cache=True)
+def _mean_visit(X, triangles, ptr, idx, i, buf, floor, halvings, below, steps):
+    """One :func:`mean_polish` visit of node i: the moves taken."""
+    deg = gather_star(X, triangles, ptr, idx, i, buf)
+    worst, mean = gathered_stats(buf, deg, X[i, 0], X[i, 1])
+    if mean >= below:
+        return 0
+    need = max(min(worst, floor), 0.0)
+    step = 0.1 * shortest_edge(X, triangles, ptr, idx, i)
+    mean, moves = _gradient_steps(X, i, buf, deg, step, steps, need, mean)
+    if moves == 0:
+        mean, moves = _compass(X, i, buf, deg, step, halvings, need, mean)
+    return moves
+
+
+@njit(cache=True, parallel=True)
 def mean_polish(X, triangles, ptr, idx, n_boundary, sweeps, movable, floor, halvings, below,
                 steps=0):
     """Raise each star's mean radius ratio: up to ``steps`` steps along its
@@ -172,25 +208,24 @@ def mean_polish(X, triangles, ptr, idx, n_boundary, sweeps, movable, floor, halv
     Both start from a tenth of the shortest incident edge; a step is taken
     if the star's mean grows and its minimum stays at least min(its value
     before, ``floor``) (exact orientation as in :func:`odt_smooth`).  Only
-    stars whose mean is below ``below`` are searched.  ``sweeps``
-    Gauss-Seidel sweeps; X in place.  Returns the steps taken."""
+    stars whose mean is below ``below`` are searched.  ``sweeps`` sweeps,
+    colour by colour (:mod:`bubblemesh._colouring`); X in place.  Returns
+    the steps taken."""
+    order, colour_ptr = colour_classes(triangles, ptr, idx, n_boundary, movable)
+    most = star_buffer(ptr).shape[0]
     taken = 0
-    buf = star_buffer(ptr)
     for _ in range(sweeps):
         moved = 0
-        for i in range(n_boundary, X.shape[0]):
-            if not movable[i] or ptr[i + 1] == ptr[i]:
-                continue
-            deg = gather_star(X, triangles, ptr, idx, i, buf)
-            worst, mean = gathered_stats(buf, deg, X[i, 0], X[i, 1])
-            if mean >= below:
-                continue
-            need = max(min(worst, floor), 0.0)
-            step = 0.1 * shortest_edge(X, triangles, ptr, idx, i)
-            mean, moves = _gradient_steps(X, i, buf, deg, step, steps, need, mean)
-            if moves == 0:
-                mean, moves = _compass(X, i, buf, deg, step, halvings, need, mean)
-            moved += moves
+        for c in range(colour_ptr.shape[0] - 1):
+            lo, hi = colour_ptr[c], colour_ptr[c + 1]
+            blocks = (hi - lo + BLOCK - 1) // BLOCK
+            moves = np.zeros(blocks, np.int64)
+            for b in prange(blocks):
+                buf = np.empty((most, 5))
+                for j in range(lo + b * BLOCK, min(hi, lo + (b + 1) * BLOCK)):
+                    moves[b] += _mean_visit(X, triangles, ptr, idx, order[j], buf, floor,
+                                            halvings, below, steps)
+            moved += moves.sum()
         taken += moved
         if moved == 0:
             break

@@ -284,3 +284,29 @@ def test_the_settled_mesh_is_the_same_bits_at_any_thread_count():
                      "<digest>", "exec"), scope)
     digests.add(scope["digest"])
     assert len(digests) == 1, digests
+
+
+@given(corner_domains(max_holes=2), st.sampled_from([0.3, 0.15]), st.integers(0, 2**32 - 1))
+def test_the_colour_classes_are_a_proper_colouring_of_the_chosen_nodes(loops, size, seed):
+    """The parallel sweeps visit one colour at a time: no edge may join two
+    nodes of one colour (edges from the triangles in numpy), every chosen
+    interior node is coloured exactly once, the others never, and each class
+    is in index order."""
+    from bubblemesh._colouring import colour_classes
+
+    m, _ = _sized(loops, size)
+    tri = np.asarray(m.triangles)
+    ptr, idx = stars(tri, len(m.points))
+    chosen = np.random.default_rng(seed).random(len(m.points)) < 0.8
+    order, colour_ptr = colour_classes(tri, ptr, idx, m.n_boundary, chosen)
+    expected = np.flatnonzero(chosen & (np.arange(len(chosen)) >= m.n_boundary)
+                              & (np.bincount(tri.ravel(), minlength=len(chosen)) > 0))
+    np.testing.assert_array_equal(np.sort(order), expected)
+    colour = np.full(len(chosen), -1)
+    for c in range(len(colour_ptr) - 1):
+        members = order[colour_ptr[c]:colour_ptr[c + 1]]
+        assert len(members) and np.all(np.diff(members) > 0)
+        colour[members] = c
+    edges = np.vstack([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+    a, b = colour[edges[:, 0]], colour[edges[:, 1]]
+    assert not np.any((a >= 0) & (a == b)), "an edge inside one colour class"

@@ -1,10 +1,10 @@
 """The parallel kernels: same bits on any number of threads and in any
 threading layer, and safe to fork.
 
-- generate (its parallel renumbering) and optimize (the §3 iterations, the
-  3-ring blocks) give the same bits with 1 and 2 threads (results identical
-  to the serial run), and with tbb (the ``fast`` extra) as with
-  numba's workqueue;
+- generate (its parallel renumbering), optimize (the §3 iterations, the
+  3-ring blocks) and bm.mesh (its colour-by-colour smoothing sweeps) give the
+  same bits with 1 and 2 threads (results identical to the serial run), and
+  with tbb (the ``fast`` extra) as with numba's workqueue;
 - after a mesh in the parent, a forked multiprocessing pool still meshes
   (GNU OpenMP, numba's omp layer, kills such children and the pool waits
   forever: the test has a timeout instead).
@@ -34,8 +34,9 @@ def _meshes():
     mesh = bm.generate(_disk(200))
     assert len(mesh.points) > 2048, "too small to cut the ring blocks"
     optimized = bm.optimize(mesh, max_iterations=40)
+    default = bm.mesh(_disk(200), size=0.02, max_iterations=40)  # the parallel sweeps too
     return {f"{stage}_{name}": getattr(m, name)
-            for stage, m in (("generate", mesh), ("optimize", optimized))
+            for stage, m in (("generate", mesh), ("optimize", optimized), ("mesh", default))
             for name in ("points", "triangles", "neighbors", "radii")}
 
 
