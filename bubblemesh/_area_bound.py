@@ -283,11 +283,15 @@ def _frozen(array):
 
 
 def bound_areas(mesh: Mesh, max_area: float | None = None, *,
-                rounds: int = MAX_ROUNDS) -> Mesh:
+                rounds: int = MAX_ROUNDS, settle=None) -> Mesh:
     """``mesh`` with nodes added until every triangle's area is at most its
     bound (:func:`triangle_limits` from ``mesh.domain.regions`` and
     ``max_area``); ``mesh`` itself when none is exceeded.  MeshingError naming
-    the region when ``rounds`` rounds do not reach the bounds."""
+    the region when ``rounds`` rounds do not reach the bounds.  ``settle``
+    (X, T, N, segments, n_boundary, movable) -> (T, N), X in place: the
+    caller's own settling passes, run once at the end (the insertions'
+    re-triangulation undoes its flips) and kept only if every triangle stays
+    within its bound and the smallest radius ratio does not drop."""
     regions = getattr(mesh.domain, "regions", None)
     if max_area is None and (regions is None or not (np.asarray(regions)[:, 3] > 0).any()):
         return mesh
@@ -304,7 +308,25 @@ def bound_areas(mesh: Mesh, max_area: float | None = None, *,
         T, N = _polish(nodes, T, N)
         if not len(_over(nodes.X, T, triangle_limits(nodes.X, T, N, regions, max_area))):
             break
+    if settle is not None:
+        T, N = _settled(nodes, T, N, regions, max_area, settle)
     return _with_nodes(mesh, nodes, T, N)
+
+
+def _settled(nodes, T, N, regions, max_area, settle):
+    """(T, N) after ``settle`` (see :func:`bound_areas`) if it keeps the bounds
+    and the smallest ratio, nodes.X moved with it; else as they were."""
+    X = nodes.X.copy()
+    movable = nodes.movable.copy()
+    movable[: nodes.n_b] = False
+    T2, N2 = settle(X, np.array(T), np.array(N), nodes.segments, nodes.n_b, movable)
+    N2 = _walled(T2, N2, nodes.segments, len(X))
+    if len(_over(X, T2, triangle_limits(X, T2, N2, regions, max_area))):
+        return T, N
+    if triangle_quality(X, T2).min() < triangle_quality(nodes.X, T).min():
+        return T, N
+    nodes.X = X
+    return T2, N2
 
 
 def _insert(nodes, T, N, regions, max_area, rounds):

@@ -37,8 +37,14 @@ def _inverse_separation(X, i, j):
 
 @njit(cache=True, parallel=True)
 def move(X, R, Xn, home, start, count, nearby, inverse, reuse, n_boundary, alpha, P0, tri0,
-          nbr0, clearance, X0, R0, skin):
+          nbr0, clearance, X0, R0, skin, V, beta):
     """(b) eq. 7-8 for every interior node, moves kept inside the domain.
+
+    ``beta`` > 0 (``bubblemesh.mesh``, not the paper) adds beta times each
+    node's last move ``V[i]`` to its step (heavy-ball momentum: the slow,
+    long-wavelength settling of the bubble lattice converges in fewer
+    iterations), halved with it, and stores the move taken in ``V``;
+    ``beta`` = 0 is the paper's step, bit for bit, and leaves ``V`` alone.
 
     The overlap term of eq. 8 is (r_i + r_j - l) / l = (r_i + r_j) / l - 1.
     The previous eq. 9 pass already evaluated 1 / l at these very positions
@@ -74,9 +80,16 @@ def move(X, R, Xn, home, start, count, nearby, inverse, reuse, n_boundary, alpha
         Xn[i, 0] = X[i, 0]
         Xn[i, 1] = X[i, 1]
         step = alpha
-        for attempt in range(MAX_HALVINGS + 1 if fx != 0.0 or fy != 0.0 else 0):
-            tx = X[i, 0] + step * fx
-            ty = X[i, 1] + step * fy
+        vx = beta * V[i, 0] if beta > 0.0 else 0.0
+        vy = beta * V[i, 1] if beta > 0.0 else 0.0
+        pushed = fx != 0.0 or fy != 0.0 or vx != 0.0 or vy != 0.0
+        for attempt in range(MAX_HALVINGS + 1 if pushed else 0):
+            if beta > 0.0:
+                tx = X[i, 0] + step * fx + (step / alpha) * vx
+                ty = X[i, 1] + step * fy + (step / alpha) * vy
+            else:
+                tx = X[i, 0] + step * fx
+                ty = X[i, 1] + step * fy
             if (tx - P0[i, 0]) ** 2 + (ty - P0[i, 1]) ** 2 < clearance[i] ** 2:
                 t = home[i]  # deep inside: no walk needed, the old start stays valid
             else:
@@ -91,6 +104,9 @@ def move(X, R, Xn, home, start, count, nearby, inverse, reuse, n_boundary, alpha
             step *= 0.5
         dx = Xn[i, 0] - X[i, 0]
         dy = Xn[i, 1] - X[i, 1]
+        if beta > 0.0:
+            V[i, 0] = dx
+            V[i, 1] = dy
         largest = max(largest, (dx * dx + dy * dy) / (R[i] * R[i]))
         if outgrew(Xn, R, X0, R0, i, skin):
             expired += 1

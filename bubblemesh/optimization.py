@@ -47,6 +47,8 @@ from .errors import GeometryError, MeshingError
 from .timing import PhaseClock
 from .triangulation import constrained_delaunay
 
+_NO_MOMENTUM = np.zeros((1, 2))  # the paper's step: move() never reads it
+
 __all__ = ["optimize"]
 
 
@@ -100,7 +102,8 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
             reuse = False
             clock.lap("lists")
         expired, stuck, largest = move(X, R, Xn, home, *lists.arrays, reuse, n_b, alpha, P0,
-                                        tri0, nbr0, clearance, lists.X0, lists.R0, lists.skin)
+                                        tri0, nbr0, clearance, lists.X0, lists.R0, lists.skin,
+                                        _NO_MOMENTUM, 0.0)
         blocked += stuck
         clock.lap("move")
         if expired:

@@ -13,7 +13,8 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    and a node on the bisector of each corner that two triangles fit best.
 3. A stable §3: the eq. 7-8 overlap forces with the node bubbles anchored at
    their §2 radii (amplified, §3.1; eq. 9 is not applied, so radii cannot
-   drift; the frontal seeds hold still like the boundary),
+   drift; the frontal seeds hold still like the boundary), each step plus
+   ``momentum`` times the node's last move (heavy ball),
    stopped when the largest move falls below ``tol`` times the radius;
    the §3.5 re-triangulation; then quality-guarded smoothing
    (:mod:`bubblemesh._smoothing`) alternating with re-triangulation; then
@@ -199,14 +200,15 @@ def _check(name, value, ok, expected):
 
 
 def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterations=200,
-                tol=1e-2, amplification=1.7, alpha=0.2, rings=3, smoothing_rounds=3,
-                smoothing_sweeps=4, progress=False) -> Mesh:
+                tol=1e-3, amplification=1.7, alpha=0.2, momentum=0.7, rings=3,
+                smoothing_rounds=3, smoothing_sweeps=4, progress=False) -> Mesh:
     """The robust mesher (module docstring); :func:`bubblemesh.mesh` documents
     the arguments."""
     if not isinstance(domain, Domain):
         raise TypeError(f"mesh: domain must be a bubblemesh.Domain, got {type(domain).__name__}")
     _check("amplification", amplification, lambda v: 0 < v <= 2.0, "in (0, 2]")
     _check("alpha", alpha, lambda v: 0 < v <= 0.3, "in (0, 0.3]")
+    _check("momentum", momentum, lambda v: 0 <= v < 1, "in [0, 1)")
     _check("tol", tol, lambda v: math.isfinite(v) and v >= 0, "finite and >= 0")
     for name, value, top in (("max_iterations", max_iterations, None), ("rings", rings, 6),
                              ("smoothing_rounds", smoothing_rounds, None),
@@ -251,10 +253,16 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterati
     try:
         mesh = stable_optimize(generated, max_iterations=int(max_iterations), tol=float(tol),
                                amplification=float(amplification), alpha=float(alpha),
-                               rings=int(rings), smoothing_rounds=int(smoothing_rounds),
+                               momentum=float(momentum), rings=int(rings),
+                               smoothing_rounds=int(smoothing_rounds),
                                smoothing_sweeps=int(smoothing_sweeps), size_field=field,
                                clock=clock)
-        return bound_areas(mesh, max_area)  # Triangle's -a, global and regional: hard bounds
+
+        def settle(X, T, N, segments, n_b, movable):
+            return _settle(X, T, N, segments, n_b, _node_sizes(mesh, X, field), movable)[:2]
+
+        # Triangle's -a, global and regional: hard bounds
+        return bound_areas(mesh, max_area, settle=settle)
     except MemoryError:  # sizes far finer than the domain's extent
         raise MeshingError("mesh: not enough memory to optimise the mesh this size field "
                            "asks for (sizes far finer than the domain)") from None
@@ -283,7 +291,7 @@ def _frontal_seeds(domain):
     return seeds[inside(domain.points, domain.segments, tri, nbr, seeds, rows)]
 
 
-def _forces(mesh, R, max_iterations, tol, alpha, rings):
+def _forces(mesh, R, max_iterations, tol, alpha, rings, momentum):
     """Eq. 7-8 with fixed radii R until the largest relative move < tol.  The
     frontal seeds hold still like the boundary: released, the forces push
     seeds out of their pockets between boundary nodes and leave boundary nodes
@@ -298,6 +306,7 @@ def _forces(mesh, R, max_iterations, tol, alpha, rings):
     n = len(P0)
     ring_ptr, ring_idx = ring_neighbors(*node_adjacency(tri0, nbr0, n), n, rings)
     X, Xn = P0.copy(), P0.copy()
+    V = np.zeros_like(P0)  # each node's last move, for the momentum
     home = vertex_triangles(tri0, n)
     clearance = boundary_clearance(P0, np.asarray(mesh.segments), n_b,
                                    reach=4.0 * float(R.max(initial=0.0)))
@@ -310,7 +319,7 @@ def _forces(mesh, R, max_iterations, tol, alpha, rings):
             lists.build(X, R)
         expired, stuck, largest = move(X, R, Xn, home, *lists.arrays, False, fixed, alpha,
                                        P0, tri0, nbr0, clearance, lists.X0, lists.R0,
-                                       lists.skin)
+                                       lists.skin, V, momentum)
         expired = expired > 0
         blocked += stuck
         X, Xn = Xn, X
@@ -418,7 +427,7 @@ def _settle(X, triangles, neighbors, segments, n_b, h, movable):
 
 
 def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, alpha=0.1,
-                    rings=3, smoothing_rounds=3, smoothing_sweeps=4, settle=True,
+                    momentum=0.0, rings=3, smoothing_rounds=3, smoothing_sweeps=4, settle=True,
                     size_field=None, clock=None) -> Mesh:
     """Step 3 of the module docstring on a §2 mesh; the result's smallest eq. 10
     radius ratio is never below ``mesh``'s.  ``settle``: run :func:`_settle`
@@ -429,7 +438,8 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
     P0 = np.array(mesh.points)
     q0 = float(triangle_quality(P0, np.asarray(mesh.triangles)).min(initial=1.0))
     R = np.asarray(mesh.radii, dtype=np.float64) * amplification
-    X, iterations, largest, blocked, builds = _forces(mesh, R, max_iterations, tol, alpha, rings)
+    X, iterations, largest, blocked, builds = _forces(mesh, R, max_iterations, tol, alpha, rings,
+                                                      momentum)
     _separate(X, P0)
     clock.lap("forces")
     triangles, neighbors = _triangulate(X, segments)
@@ -457,6 +467,7 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
             break
         X[nodes] = P0[nodes]
         movable[nodes] = False
+        _separate(X, P0)  # a moved node may sit on a reverted one's §2 position
         triangles, neighbors = _triangulate(X, segments)
     if triangle_quality(X, triangles).min(initial=1.0) < q0:
         fallback = "generation"  # the §2 mesh, smoothed: never worse by construction
