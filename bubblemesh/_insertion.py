@@ -33,7 +33,7 @@ from ._status import (
 from .bubbles import element_radius, triangle_area
 from .memory import prefetch, unsigned
 from .predicates import orient2d
-from .sizing import cone_at
+from .sizing import field_at
 
 # integer state slots
 S_NPTS, S_NTRI, S_HEAP, S_INSERTIONS, S_STAMP, S_CAVITY = range(6)
@@ -91,7 +91,7 @@ def _bubble(P, R, tri, t, r_e, capped, field, factor, stack):
     if capped:  # the field at the centroid (eq. 3's centroid, the same bits)
         ex = (P[a, 0] + P[b, 0] + P[c, 0]) / 3.0
         ey = (P[a, 1] + P[b, 1] + P[c, 1]) / 3.0
-        r = factor * cone_at(ex, ey, stack, *field)
+        r = factor * field_at(ex, ey, stack, *field)
     else:
         r = element_radius(
             P[a, 0], P[a, 1], R[a], P[b, 0], P[b, 1], R[b], P[c, 0], P[c, 1], R[c]

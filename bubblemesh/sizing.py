@@ -42,7 +42,7 @@ from numba import njit, prange
 from bubblemesh.domain import Domain
 from bubblemesh.errors import MeshingError
 
-__all__ = ["SizeField", "as_size_function", "cone_at", "STACK_SIZE"]
+__all__ = ["SizeField", "as_size_function", "cone_at", "field_at", "STACK_SIZE"]
 
 SAMPLING = 0.5  # boundary samples are spaced <= SAMPLING * h
 FEATURE_SLACK = 1.25  # on the boundary h <= FEATURE_SLACK * feature size
@@ -55,6 +55,9 @@ _LEAF = 8  # items per tree leaf
 _STACK = 256  # > twice the depth of any tree over < 2**60 items
 STACK_SIZE = _STACK
 _BLOCK = 256  # queries per parallel task (one traversal stack each)
+# the cap grid: cells of GRID_CELLS caps (at most GRID_MAX a side), grown by GRID_MARGIN
+# of a side and tested against (1 + CAP_MARGIN) cap, far above any rounding
+GRID_CELLS, GRID_MAX, GRID_MARGIN, CAP_MARGIN = 8.0, 256, 1e-6, 1e-9
 _EQUILATERAL_RADIUS = math.sqrt(math.sqrt(3.0) / (4.0 * math.pi))  # eq. 2 with l1 = l2 = h
 
 
@@ -162,18 +165,100 @@ def cone_at(x, y, stack, px, py, ph, start, end, left, box, least, g, cap):
     return best
 
 
+@njit(cache=True)
+def field_at(x, y, stack, grid, full, px, py, ph, start, end, left, box, least, g, cap):
+    """:func:`cone_at`, the same value, answered at once where the cap grid
+    (:func:`_cap_grid`) says the field is the cap all over the cell of (x, y).
+    ``grid`` = (x0, y0, 1 / cell side, columns, rows, growth); ``full`` per cell."""
+    fx = (x - grid[0]) * grid[2]
+    fy = (y - grid[1]) * grid[2]
+    if fx >= 0.0 and fy >= 0.0 and fx < grid[3] and fy < grid[4]:
+        if full[int(fy) * int(grid[3]) + int(fx)]:
+            return cap
+    return cone_at(x, y, stack, px, py, ph, start, end, left, box, least, g, cap)
+
+
 @njit(cache=True, parallel=True)
-def _cone_min(q, px, py, ph, start, end, left, box, least, g, cap):
-    """:func:`cone_at` for each query point."""
+def _cone_min(q, grid, full, px, py, ph, start, end, left, box, least, g, cap):
+    """:func:`field_at` for each query point."""
     n = q.shape[0]
     out = np.empty(n)
     for block in prange((n + _BLOCK - 1) // _BLOCK):
         stack = np.empty(_STACK, np.int64)
         for j in range(block * _BLOCK, min(n, (block + 1) * _BLOCK)):
-            out[j] = cone_at(
-                q[j, 0], q[j, 1], stack, px, py, ph, start, end, left, box, least, g, cap
-            )
+            out[j] = field_at(q[j, 0], q[j, 1], stack, grid, full, px, py, ph, start, end,
+                              left, box, least, g, cap)
     return out
+
+
+@njit(cache=True)
+def _cell_reaches_below(x0, y0, x1, y1, stack, px, py, ph, start, end, left, box, least, g,
+                        cap):
+    """True if some cone h_k + g |x - x_k| may fall below ``cap`` somewhere in
+    the box [x0, x1] x [y0, y1] (its distance to the box, not to a point)."""
+    top = 1
+    stack[0] = 0
+    while top > 0:
+        top -= 1
+        i = stack[top]
+        dx = max(box[i, 0] - x1, 0.0, x0 - box[i, 2])
+        dy = max(box[i, 1] - y1, 0.0, y0 - box[i, 3])
+        if least[i] + g * math.sqrt(dx * dx + dy * dy) >= cap:
+            continue
+        if left[i] < 0:
+            for k in range(start[i], end[i]):
+                dx = max(x0 - px[k], 0.0, px[k] - x1)
+                dy = max(y0 - py[k], 0.0, py[k] - y1)
+                if ph[k] + g * math.sqrt(dx * dx + dy * dy) < cap:
+                    return True
+            continue
+        stack[top], stack[top + 1] = left[i], left[i] + 1
+        top += 2
+    return False
+
+
+@njit(cache=True, parallel=True)
+def _full_cells(grid, px, py, ph, start, end, left, box, least, g, cap):
+    """Per cell of ``grid``: no cone reaches below (1 + CAP_MARGIN) cap in it
+    (the cell grown by grid[5], for the rounding of a query's cell index)."""
+    side = 1.0 / grid[2]
+    grow = grid[5]
+    nx, ny = int(grid[3]), int(grid[4])
+    full = np.zeros(nx * ny, np.bool_)
+    above = cap * (1.0 + CAP_MARGIN)
+    for row in prange(ny):
+        stack = np.empty(_STACK, np.int64)
+        for col in range(nx):
+            x0 = grid[0] + col * side - grow
+            y0 = grid[1] + row * side - grow
+            full[row * nx + col] = not _cell_reaches_below(
+                x0, y0, x0 + side + 2 * grow, y0 + side + 2 * grow, stack, px, py, ph, start,
+                end, left, box, least, g, above)
+    return full
+
+
+def _cap_grid(points, cap, tree, g):
+    """A grid over the sources' bounding box (cells of GRID_CELLS times the cap,
+    at most GRID_MAX a side) flagging the cells where the field is the cap
+    throughout, so most queries of a constant user size skip the tree search.
+    Empty (no cell) without a finite cap."""
+    empty = (np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0]), np.zeros(0, np.bool_))
+    if not math.isfinite(cap):
+        return empty
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    extent = float((hi - lo).max())
+    side = max(GRID_CELLS * cap, extent / GRID_MAX)
+    if not (side > 0 and math.isfinite(side)):
+        return empty
+    nx = int(math.ceil((hi[0] - lo[0]) / side)) + 1
+    ny = int(math.ceil((hi[1] - lo[1]) / side)) + 1
+    # grown by a share of the side and by a few ulps of the coordinates (far from the
+    # origin the cell corners round by more than GRID_MARGIN of a side)
+    grow = max(GRID_MARGIN * side, 16 * np.spacing(float(np.abs(points).max())))
+    grid = np.array([lo[0], lo[1], 1.0 / side, float(nx), float(ny), grow])
+    full = _full_cells(grid, tree.x, tree.y, tree.value, tree.start, tree.end, tree.left,
+                       tree.box, tree.least, g, cap)
+    return grid, full
 
 
 # --- feature size: distance to the segments not adjacent to one's own ----------------
@@ -373,21 +458,19 @@ class SizeField:
         self._tree = _Tree(points, points, values)
         self.points = self._tree.lo
         self.values = self._tree.value
+        self._grid = _cap_grid(self.points, self.cap, self._tree, self.gradation)
 
     def __call__(self, xy) -> np.ndarray:
         """h at each row of ``xy`` ((n, 2) -> (n,) float64)."""
         xy = np.ascontiguousarray(np.asarray(xy, dtype=np.float64).reshape(-1, 2))
-        t = self._tree
-        return _cone_min(
-            xy, t.x, t.y, t.value,
-            t.start, t.end, t.left, t.box, t.least, self.gradation, self.cap,
-        )  # fmt: skip
+        return _cone_min(xy, *self.kernel_args())
 
     def kernel_args(self) -> tuple:
-        """The arrays and numbers :func:`cone_at` takes after its stack, for
-        kernels that evaluate h themselves (x_k, y_k, h_k, the tree, g, cap)."""
+        """The arrays and numbers :func:`field_at` takes after its stack, for
+        kernels that evaluate h themselves (the cap grid, x_k, y_k, h_k, the
+        tree, g, cap)."""
         t = self._tree
-        return (t.x, t.y, t.value, t.start, t.end, t.left, t.box, t.least,
+        return (*self._grid, t.x, t.y, t.value, t.start, t.end, t.left, t.box, t.least,
                 float(self.gradation), float(self.cap))
 
     def radius(self, xy) -> np.ndarray:

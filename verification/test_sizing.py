@@ -215,3 +215,42 @@ def test_bad_user_sizes_and_gradations():
         SizeField.from_domain([np.zeros((3, 2))])
     with pytest.raises(bm.MeshingError, match="boundary samples"):
         SizeField.from_domain(domain, size=lambda xy: np.full(len(xy), 1e-9), max_sources=1000)
+
+
+@given(source_sets(), st.floats(0.05, 0.9))
+def test_the_cap_grid_changes_no_bit(case, share):
+    """Where the field is the cap all over a grid cell, the lookup answers
+    without the tree search: it must give exactly the tree search's value, at
+    random points, at the cells' corners and an ulp either side of them."""
+    from bubblemesh.sizing import _cone_min
+
+    pts, vals, g, rng = case
+    cap = float(np.quantile(vals, share))
+    field = SizeField(pts, vals, gradation=max(g, 0.05), cap=cap)
+    grid, full = field.kernel_args()[:2]
+    lo, hi = pts.min(axis=0) - 1, pts.max(axis=0) + 1
+    side = 1.0 / grid[2]
+    cols, rows = np.meshgrid(np.arange(int(grid[3]) + 1), np.arange(int(grid[4]) + 1))
+    corners = np.column_stack([grid[0] + cols.ravel() * side, grid[1] + rows.ravel() * side])
+    xy = np.vstack([rng.uniform(lo, hi, (500, 2)), corners, np.nextafter(corners, -np.inf),
+                    np.nextafter(corners, np.inf)])
+    no_grid = (np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0]), np.zeros(0, np.bool_))
+    want = _cone_min(xy, *no_grid, *field.kernel_args()[2:])
+    np.testing.assert_array_equal(field(xy), want)
+    np.testing.assert_allclose(want, brute_field(field.points, field.values, field.gradation,
+                                                 xy, cap), rtol=REL, atol=0)
+
+
+def test_a_constant_size_fills_the_cap_grid():
+    """On a disk meshed at a constant size finer than its boundary, the grid
+    answers for most of the interior (the cells away from the boundary)."""
+    t = np.linspace(0, 2 * np.pi, 64, endpoint=False)
+    field = SizeField.from_domain(bm.Domain.from_loops([np.column_stack([np.cos(t),
+                                                                          np.sin(t)])]),
+                                  size=0.01)
+    grid, full = field.kernel_args()[:2]
+    side = 1.0 / grid[2]
+    centres = np.column_stack([grid[0] + (np.arange(len(full)) % int(grid[3]) + 0.5) * side,
+                               grid[1] + (np.arange(len(full)) // int(grid[3]) + 0.5) * side])
+    deep = np.hypot(*centres.T) < 1 - 2 * side
+    assert full[deep].all() and deep.sum() > 0.5 * len(full)
