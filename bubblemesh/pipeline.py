@@ -85,7 +85,7 @@ KEEP = 0.8  # the settling passes may lower a star's worst ratio to max(mesh min
 ODT_ROUNDS, ODT_SWEEPS = 1, 2  # ODT passes, each followed by the CDT
 FLIP_PASSES = 20
 MAX_SCALE = 1e12  # largest domain extent over the smallest size that bm.mesh takes
-MEAN_SWEEPS, MEAN_HALVINGS, MEAN_BELOW = 4, 4, 1.0  # 1.0: every star
+MEAN_SWEEPS, MEAN_HALVINGS, MEAN_BELOW = 3, 4, 1.0  # 1.0: every star
 MEAN_STEPS = 3  # gradient steps per star visit before any compass search
 
 
@@ -201,7 +201,7 @@ def _check(name, value, ok, expected):
 
 def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterations=200,
                 tol=1e-3, amplification=1.7, alpha=0.2, momentum=0.7, rings=3,
-                smoothing_rounds=3, smoothing_sweeps=4, progress=False) -> Mesh:
+                smoothing_rounds=3, smoothing_sweeps=2, progress=False) -> Mesh:
     """The robust mesher (module docstring); :func:`bubblemesh.mesh` documents
     the arguments."""
     if not isinstance(domain, Domain):
