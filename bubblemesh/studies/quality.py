@@ -1,7 +1,7 @@
 """Quality study of the robust mesher bm.mesh against Triangle -pq30 and Gmsh
 Frontal-Delaunay (Mesh.Algorithm=6) on the same input at matched element counts.
 
-    python -m bubblemesh.studies.quality [--data DIR] [--out DIR] [--big]
+    python -m bubblemesh.studies.quality [--data DIR] [--out DIR] [--random N] [--big]
 
 Gmsh and Triangle get bm's refined boundary nodes; Gmsh also bm's size field
 (scaled until the counts match within 3%).  ``--data``: a folder with
@@ -9,8 +9,9 @@ Triangle's example A.poly and double_hex3.poly (skipped if absent).  Prints,
 per case, each mesher's element count (and bm's over what the size field
 predicts), minimum and mean radius ratio and count below 0.7, with the winners
 of each; ``--out`` writes that table as quality_vs_gmsh.csv.  Then the
-iteration sweeps, the size test and (``--big``) bm against Gmsh at 100k
-elements.
+iteration sweeps, the size test, (``--random N``) N random corner-only
+polygons against Triangle with exact validity checks, and (``--big``) bm
+against Gmsh at 100k elements.
 """
 
 from __future__ import annotations
@@ -262,6 +263,51 @@ def size_test():
               f"{np.mean((r >= 0.8) & (r <= 1.25)):.3f}, median {np.median(r):.3f}")
 
 
+def random_polygons(count=1000, seed=0):
+    """bm.mesh on ``count`` random corner-only polygons with 0-3 holes
+    (max_area = area / 200) against Triangle -pq30 at the area bound bm aims
+    at: every mesh checked exactly (bubblemesh.verify: validity and conformity),
+    bm's mean and minimum radius ratio, and whether its minimum reaches
+    Triangle's.  Returns the table (one row per polygon)."""
+    import pandas as pd
+    import triangle
+
+    from bubblemesh import verify
+    from bubblemesh._area_bound import FILL
+    from bubblemesh.pipeline import corner_angles
+
+    rng = np.random.default_rng(seed)
+    rows = []
+    while len(rows) < count:
+        try:
+            domain = bm.Domain.from_loops(_random_polygon(rng, int(rng.integers(0, 4))))
+        except bm.GeometryError:
+            continue  # a self-touching draw
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", bm.QualityWarning)
+            m = bm.mesh(domain, max_area=domain.area / 200)
+        report = verify.check(m.points, m.triangles, domain.segments, domain.points,
+                              holes=domain.hole_points if len(domain.hole_points) else None,
+                              delaunay=False)
+        pts = dict(vertices=np.array(domain.points), segments=np.array(domain.segments))
+        if len(domain.hole_points):
+            pts["holes"] = np.array(domain.hole_points)
+        out = triangle.triangulate(pts, f"pq30a{FILL * domain.area / 200:.17g}Q")
+        _, qmin, qmean, _ = _stats(m.points, m.triangles)
+        _, tmin, tmean, _ = _stats(out["vertices"], out["triangles"])
+        rows.append(dict(valid=report.ok, N=len(m.triangles), min=qmin, mean=qmean,
+                         triangle_min=tmin, triangle_mean=tmean,
+                         sharpest=math.degrees(float(corner_angles(domain).min()))))
+    df = pd.DataFrame(rows)
+    print(f"{len(df)} random corner-only polygons (seed {seed}): {int(df.valid.sum())} valid "
+          f"and conforming; mean ratio >= 0.95 on {int((df['mean'] >= 0.95).sum())} (lowest "
+          f"{df['mean'].min():.4f}, median {df['mean'].median():.4f}); minimum >= Triangle "
+          f"-pq30's on {int((df['min'] >= df.triangle_min).sum())}; minimum below 0.5 on "
+          f"{int((df['min'] < 0.5).sum())} ({int(((df['min'] < 0.5) & (df.sharpest < 30)).sum())}"
+          " at a corner under 30 degrees)")
+    return df
+
+
 def timings(n=100_000, repeats=3):
     """bm.mesh against Gmsh Frontal-Delaunay (same boundary nodes, same size)
     on a unit disk of about n elements: the minimum of ``repeats`` alternating
@@ -289,6 +335,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=None)
     parser.add_argument("--big", action="store_true")
+    parser.add_argument("--random", type=int, default=0, metavar="N",
+                        help="also mesh N random corner-only polygons against Triangle")
     parser.add_argument("--skip-table", action="store_true")
     parser.add_argument("--out", type=Path, default=None,
                         help="write quality_vs_gmsh.csv into this folder")
@@ -297,6 +345,8 @@ def main():
         quality_table(args.data, args.out)
     sweeps()
     size_test()
+    if args.random:
+        random_polygons(args.random)
     if args.big:
         timings()
 
