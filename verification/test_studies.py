@@ -418,3 +418,47 @@ def test_the_random_polygon_study_checks_every_mesh_exactly():
 
     df = random_polygons(3, seed=5)
     assert len(df) == 3 and df.valid.all()
+
+
+# --------------------------------------------------------------------------- quality study
+
+
+def _density_integral(h_of_x, x0, x1, height):
+    """Exact integral of 4 / (sqrt(3) h^2) over [x0, x1] x [0, height] for h = a + b x,
+    given as (a, b): height / b (1 / h(x0) - 1 / h(x1)) times 4 / sqrt(3)."""
+    a, b = h_of_x
+    return 4 / np.sqrt(3) * height / b * (1 / (a + b * x0) - 1 / (a + b * x1))
+
+
+def test_the_count_prediction_against_closed_forms():
+    """The element count a size field asks for, integral of 4 / (sqrt(3) h^2):
+    constant h on a square, h linear in x on a rectangle with a rectangular
+    hole (both exact on the polygon: the true error must lie within the
+    reported estimate), and h = a + b r on an annulus of 2048-gons (the
+    polygons' area differs from the circles' by ~2e-7 of the value)."""
+    from bubblemesh.studies.quality import predicted_count
+
+    square = bm.Domain.from_loops([[(0, 0), (1, 0), (1, 1), (0, 1)]])
+    constant = predicted_count(square, lambda xy: np.full(len(xy), 0.05))
+    assert constant.count == pytest.approx(1 / (np.sqrt(3) / 4 * 0.05**2), rel=1e-12)
+
+    a, b = 0.01, 0.2
+    holed = bm.Domain.from_loops([[(0, 0), (2, 0), (2, 1), (0, 1)],
+                                  [(0.5, 0.25), (1.0, 0.25), (1.0, 0.75), (0.5, 0.75)]])
+    linear = predicted_count(holed, lambda xy: a + b * xy[:, 0])
+    exact = _density_integral((a, b), 0, 2, 1) - _density_integral((a, b), 0.5, 1.0, 0.5)
+    assert abs(linear.count - exact) <= linear.error + 1e-12 * exact
+    assert linear.error <= 1e-4 * exact and linear.pieces > 100  # the field was resolved
+
+    t = 2 * np.pi * np.arange(2048) / 2048
+    circle = np.column_stack([np.cos(t), np.sin(t)])
+    annulus = bm.Domain.from_loops([circle, 0.3 * circle])
+    a, b = 0.02, 0.3
+    radial = predicted_count(annulus, lambda xy: a + b * np.hypot(xy[:, 0], xy[:, 1]))
+
+    def primitive(r):  # of 2 pi r / (a + b r)^2
+        return 2 * np.pi * (np.log(a + b * r) + a / (a + b * r)) / b**2
+
+    exact = 4 / np.sqrt(3) * (primitive(1.0) - primitive(0.3))
+    assert radial.count == pytest.approx(exact, rel=2e-6)
+    assert radial.error <= 1e-4 * exact
