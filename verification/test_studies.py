@@ -409,15 +409,30 @@ def test_the_exact_check_judges_cells_like_the_verifier():
     assert verdict.startswith("failed:") and "area" in verdict, verdict
 
 
-def test_the_random_polygon_study_checks_every_mesh_exactly():
-    """The study behind the corner-only polygon numbers: it meshes the polygons
-    it reports and every row's mesh passes bubblemesh.verify's exact checks."""
+def test_the_random_polygon_study_against_gmsh_checks_every_mesh(capsys):
+    """One row per polygon with bm's, Gmsh's and Triangle's columns; every
+    mesh passed bubblemesh.verify; Gmsh's count matched to bm's; bm's numbers
+    are those of bm.mesh on the polygon, recomputed here; the printed win
+    count is the table's."""
     pytest.importorskip("triangle")
+    pytest.importorskip("gmsh")
     pytest.importorskip("pandas")
-    from bubblemesh.studies.quality import random_polygons
+    from bubblemesh.studies.quality import _random_domains, random_polygons
 
-    df = random_polygons(3, seed=5)
-    assert len(df) == 3 and df.valid.all()
+    df = random_polygons(4, seed=5)
+    assert len(df) == 4
+    for mesher in ("bm", "gmsh", "triangle"):
+        assert df[f"valid_{mesher}"].all()
+        assert (df[f"below_off_sharp_{mesher}"] <= df[f"below_{mesher}"]).all()
+    assert (abs(df.N_gmsh / df.N_bm - 1) <= 0.03).all()
+    for row, domain in zip(df.itertuples(), _random_domains(4, seed=5)):
+        m = bm.mesh(domain, max_area=domain.area / 200)
+        rho = _rho(np.asarray(m.points), np.asarray(m.triangles))
+        assert row.N_bm == len(rho) and row.mean_bm == pytest.approx(rho.mean(), abs=1e-12)
+        assert row.min_bm == pytest.approx(rho.min(), abs=1e-12)
+        assert row.ratio_bm == pytest.approx(len(rho) / row.predicted, rel=1e-12)
+    wins = int((df.mean_bm >= df.mean_gmsh).sum())
+    assert f"mean >= Gmsh's on {wins} of 4" in capsys.readouterr().out
 
 
 # --------------------------------------------------------------------------- quality study

@@ -94,6 +94,34 @@ def _stats(points, triangles):
     return len(triangles), float(q.min()), float(q.mean()), int(np.sum(q < 0.7))
 
 
+def _sharp_corner_flags(domain, points):
+    """True at the mesh points that are input corners sharper than
+    SHARP_ANGLE (every mesher here keeps input nodes bit for bit): an element
+    there cannot reach a radius ratio of 0.7."""
+    from bubblemesh.pipeline import SHARP_ANGLE, corner_angles
+
+    corners = np.asarray(domain.points)[corner_angles(domain) < SHARP_ANGLE]
+    return np.isin(points[:, 0] + 1j * points[:, 1], corners[:, 0] + 1j * corners[:, 1])
+
+
+def measure(domain, points, triangles):
+    """One mesh of ``domain``: element count N, min and mean radius ratio,
+    count below 0.7, that count without the elements touching an input corner
+    sharper than SHARP_ANGLE, and bubblemesh.verify's exact verdict on
+    validity and conformity to the input boundary (``valid``)."""
+    from bubblemesh import verify
+
+    p = np.asarray(points, dtype=np.float64)[:, :2]
+    t = np.asarray(triangles, dtype=np.int64)
+    q = radius_ratio(p, t)
+    poor = q < 0.7
+    at_sharp = _sharp_corner_flags(domain, p)[t].any(axis=1)
+    holes = domain.hole_points if len(domain.hole_points) else None
+    report = verify.check(p, t, domain.segments, domain.points, holes=holes, delaunay=False)
+    return dict(N=len(t), min=float(q.min()), mean=float(q.mean()), below=int(poor.sum()),
+                below_off_sharp=int((poor & ~at_sharp).sum()), valid=bool(report.ok))
+
+
 # The element density of a size field: equilateral triangles of side h per area.
 ELEMENT_DENSITY = 4.0 / math.sqrt(3.0)
 _S15 = math.sqrt(15.0)
@@ -362,49 +390,88 @@ def size_test():
               f"{np.mean((r >= 0.8) & (r <= 1.25)):.3f}, median {np.median(r):.3f}")
 
 
-def random_polygons(count=1000, seed=0):
-    """bm.mesh on ``count`` random corner-only polygons with 0-3 holes
-    (max_area = area / 200) against Triangle -pq30 at the area bound bm aims
-    at: every mesh checked exactly (bubblemesh.verify: validity and conformity),
-    bm's mean and minimum radius ratio, and whether its minimum reaches
-    Triangle's.  Returns the table (one row per polygon)."""
-    import pandas as pd
-    import triangle
-
-    from bubblemesh import verify
-    from bubblemesh._area_bound import FILL
-    from bubblemesh.pipeline import corner_angles
-
+def _random_domains(count, seed):
+    """``count`` random corner-only polygons with 0-3 holes, drawn from ``seed``
+    (self-touching draws skipped)."""
     rng = np.random.default_rng(seed)
-    rows = []
-    while len(rows) < count:
+    made = 0
+    while made < count:
         try:
             domain = bm.Domain.from_loops(_random_polygon(rng, int(rng.integers(0, 4))))
         except bm.GeometryError:
-            continue  # a self-touching draw
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", bm.QualityWarning)
-            m = bm.mesh(domain, max_area=domain.area / 200)
-        report = verify.check(m.points, m.triangles, domain.segments, domain.points,
-                              holes=domain.hole_points if len(domain.hole_points) else None,
-                              delaunay=False)
-        pts = dict(vertices=np.array(domain.points), segments=np.array(domain.segments))
-        if len(domain.hole_points):
-            pts["holes"] = np.array(domain.hole_points)
-        out = triangle.triangulate(pts, f"pq30a{FILL * domain.area / 200:.17g}Q")
-        _, qmin, qmean, _ = _stats(m.points, m.triangles)
-        _, tmin, tmean, _ = _stats(out["vertices"], out["triangles"])
-        rows.append(dict(valid=report.ok, N=len(m.triangles), min=qmin, mean=qmean,
-                         triangle_min=tmin, triangle_mean=tmean,
-                         sharpest=math.degrees(float(corner_angles(domain).min()))))
-    df = pd.DataFrame(rows)
-    print(f"{len(df)} random corner-only polygons (seed {seed}): {int(df.valid.sum())} valid "
-          f"and conforming; mean ratio >= 0.95 on {int((df['mean'] >= 0.95).sum())} (lowest "
-          f"{df['mean'].min():.4f}, median {df['mean'].median():.4f}); minimum >= Triangle "
-          f"-pq30's on {int((df['min'] >= df.triangle_min).sum())}; minimum below 0.5 on "
-          f"{int((df['min'] < 0.5).sum())} ({int(((df['min'] < 0.5) & (df.sharpest < 30)).sum())}"
-          " at a corner under 30 degrees)")
+            continue
+        made += 1
+        yield domain
+
+
+def _random_row(domain):
+    """bm.mesh (max_area = area / 200), Gmsh Frontal-Delaunay and Triangle
+    -pq30 (both on bm's refined boundary at bm's count, Gmsh with bm's size
+    field) on one polygon: :func:`measure` of each as ``<key>_<mesher>``, the
+    predicted count and N over it for bm and Gmsh, the sharpest corner."""
+    from bubblemesh.pipeline import _user_size, corner_angles
+    from bubblemesh.sizing import SizeField
+
+    max_area = domain.area / 200
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", bm.QualityWarning)
+        m = bm.mesh(domain, max_area=max_area)
+    field = SizeField.from_domain(domain, size=_user_size(None, max_area))
+    count = len(m.triangles)
+    predicted = predicted_count(domain, field).count
+    row = dict(holes=len(domain.loops) - 1, predicted=predicted,
+               sharpest=math.degrees(float(corner_angles(domain).min())))
+    for mesher, (p, t) in (("bm", (m.points, m.triangles)),
+                           ("gmsh", run_gmsh(m, field, count)[:2]),
+                           ("triangle", run_triangle(m, domain.hole_points, count))):
+        row.update({f"{k}_{mesher}": v for k, v in measure(domain, p, t).items()})
+    row["ratio_bm"] = row["N_bm"] / predicted
+    row["ratio_gmsh"] = row["N_gmsh"] / predicted
+    return row
+
+
+def random_polygons(count=1000, seed=0, out_dir=None):
+    """bm.mesh on ``count`` random corner-only polygons with 0-3 holes
+    (max_area = area / 200) against Gmsh Frontal-Delaunay and Triangle -pq30
+    at matched counts (:func:`_random_row`), every mesh checked exactly
+    (bubblemesh.verify: validity and conformity).  Prints the wins of bm over
+    Gmsh (mean, min) and every polygon bm loses with its margins; returns the
+    table (one row per polygon), written as random_vs_gmsh.csv to ``out_dir``
+    if given."""
+    import pandas as pd
+
+    df = pd.DataFrame([_random_row(d) for d in _random_domains(count, seed)])
+    df.index.name = "polygon"
+    _print_random_summary(df, seed)
+    if out_dir is not None:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        df.to_csv(out_dir / "random_vs_gmsh.csv")
     return df
+
+
+def _print_random_summary(df, seed):
+    """The random-polygon verdicts against Gmsh, then the polygons bm loses."""
+    n = len(df)
+    valid = ", ".join(f"{m} {int(df[f'valid_{m}'].sum())}" for m in ("bm", "gmsh", "triangle"))
+    mean_wins = df.mean_bm >= df.mean_gmsh
+    min_wins = df.min_bm >= df.min_gmsh
+    within = {m: int((abs(df[f"ratio_{m}"] - 1) <= 0.05).sum()) for m in ("bm", "gmsh")}
+    print(f"{n} random corner-only polygons (seed {seed}); valid and conforming: {valid}")
+    print(f"bm against Gmsh Frontal: mean >= Gmsh's on {int(mean_wins.sum())} of {n} (average "
+          f"{df.mean_bm.mean():.4f} against {df.mean_gmsh.mean():.4f}), min >= Gmsh's on "
+          f"{int(min_wins.sum())} of {n} (average {df.min_bm.mean():.4f} against "
+          f"{df.min_gmsh.mean():.4f}); min >= Triangle's on "
+          f"{int((df.min_bm >= df.min_triangle).sum())}")
+    print(f"no element below 0.7 away from corners sharper than the limit: bm "
+          f"{int((df.below_off_sharp_bm == 0).sum())}, gmsh "
+          f"{int((df.below_off_sharp_gmsh == 0).sum())} of {n}; N within 5% of the "
+          f"prediction: bm {within['bm']}, gmsh {within['gmsh']} of {n} (median N/predicted "
+          f"bm {df.ratio_bm.median():.3f}, gmsh {df.ratio_gmsh.median():.3f})")
+    for i, r in df[~(mean_wins & min_wins)].iterrows():
+        print(f"  polygon {i}: mean {r.mean_bm:.4f} vs {r.mean_gmsh:.4f} "
+              f"({r.mean_bm - r.mean_gmsh:+.4f}), min {r.min_bm:.4f} vs {r.min_gmsh:.4f} "
+              f"({r.min_bm - r.min_gmsh:+.4f}); N {r.N_bm} / {r.N_gmsh}, {r.holes} holes, "
+              f"sharpest corner {r.sharpest:.1f} degrees")
 
 
 def timings(n=100_000, repeats=3):
@@ -435,7 +502,8 @@ def main():
     parser.add_argument("--data", type=Path, default=None)
     parser.add_argument("--big", action="store_true")
     parser.add_argument("--random", type=int, default=0, metavar="N",
-                        help="also mesh N random corner-only polygons against Triangle")
+                        help="also mesh N random corner-only polygons against Gmsh and Triangle")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the random polygons")
     parser.add_argument("--skip-table", action="store_true")
     parser.add_argument("--out", type=Path, default=None,
                         help="write quality_vs_gmsh.csv into this folder")
@@ -445,7 +513,7 @@ def main():
     sweeps()
     size_test()
     if args.random:
-        random_polygons(args.random)
+        random_polygons(args.random, args.seed, args.out)
     if args.big:
         timings()
 
