@@ -1,18 +1,22 @@
 """Quality study of the robust mesher bm.mesh against Triangle -pq30 and Gmsh
 Frontal-Delaunay (Mesh.Algorithm=6) on the same input at matched element counts.
 
-    python -m bubblemesh.studies.quality [--data DIR] [--out DIR] [--random N] [--big]
+    python -m bubblemesh.studies.quality [--data DIR] [--out DIR] [--big]
+                                         [--random N [--seed S]] [--timings]
 
 Gmsh and Triangle get bm's refined boundary nodes; Gmsh also bm's size field
 (scaled until the counts match within 3%).  ``--data``: a folder with
-Triangle's example A.poly and double_hex3.poly (skipped if absent).  Prints,
-per case, each mesher's element count (and its ratio to the count the size
-field asks for: the integral of its element density over the domain,
-:func:`predicted_count`), minimum and mean radius ratio and count below 0.7, with the winners
-of each; ``--out`` writes that table as quality_vs_gmsh.csv.  Then the
-iteration sweeps, the size test, (``--random N``) N random corner-only
-polygons against Triangle with exact validity checks, and (``--big``) bm
-against Gmsh at 100k elements.
+Triangle's example A.poly and double_hex3.poly (skipped if absent); ``--big``
+adds the benchmark's 100k-element uniform disk (Gmsh with its own constant
+size).  Prints, per case and mesher, the element count and its ratio to the
+count the size field asks for (the integral of its element density over the
+domain, :func:`predicted_count`), the minimum and mean radius ratio, the count
+below 0.7 and how many of those do not touch an input corner too sharp for 0.7,
+bubblemesh.verify's verdict, the winners, and on how many cases bm meets each
+of the project's targets; ``--out`` writes that table as quality_vs_gmsh.csv.
+Then the iteration sweeps, the size test, (``--random N``) N random
+corner-only polygons against Gmsh and Triangle (random_vs_gmsh.csv with
+``--out``), and (``--timings``) bm against Gmsh's time at 100k elements.
 """
 
 from __future__ import annotations
@@ -235,7 +239,8 @@ def run_triangle(mesh, hole_points, count):
     if len(hole_points):
         pts["holes"] = np.array(hole_points)
     for _ in range(5):  # match the element count
-        out = triangle.triangulate(pts, f"pq30a{area:.17g}Q")
+        # positional: Triangle would read the "e" of 3e-05 as its -e switch
+        out = triangle.triangulate(pts, f"pq30a{np.format_float_positional(area)}Q")
         n = len(out["triangles"])
         if abs(n - count) < 0.03 * count:
             break
@@ -245,13 +250,26 @@ def run_triangle(mesh, hole_points, count):
 
 def run_gmsh(mesh, field, count, algorithm=6):
     """Gmsh (Frontal-Delaunay by default) on bm's refined boundary nodes, no
-    further boundary splits, sizes from bm's size field times a factor tuned
-    until the element count is within 3% of count (else the closest of 12
-    runs).  Returns (points, triangles, seconds of that run)."""
-    P = np.asarray(mesh.domain.points)
+    further boundary splits, sizes from bm's size field (a Python callback)
+    times a factor tuned until the element count is within 3% of count (else
+    the closest of 12 runs).  Returns (points, triangles, seconds of that run)."""
+    return _tuned(count, lambda scale: _gmsh_once(mesh, field, scale, algorithm))
+
+
+def run_gmsh_uniform(mesh, size, count, algorithm=6):
+    """:func:`run_gmsh` for a constant size: Gmsh's own Mesh.MeshSizeMin =
+    MeshSizeMax = size times the tuned factor (a Python callback costs more
+    than the meshing at 100k elements)."""
+    return _tuned(count, lambda scale: _gmsh_once(mesh, float(size), scale, algorithm))
+
+
+def _tuned(count, run):
+    """The run(scale) -> (points, triangles, seconds) whose count is within 3%
+    of ``count`` (else the closest of 12): scale by the square root of the
+    count's ratio, bisecting once the target is bracketed."""
     scale, low, high, best = 1.0, 0.0, math.inf, None
     for _ in range(12):
-        pts, tri, seconds = _gmsh_once(mesh, P, field, scale, algorithm)
+        pts, tri, seconds = run(scale)
         if best is None or abs(len(tri) - count) < abs(len(best[1]) - count):
             best = (pts, tri, seconds)
         if abs(len(tri) - count) < 0.03 * count:
@@ -264,13 +282,16 @@ def run_gmsh(mesh, field, count, algorithm=6):
         scale *= math.sqrt(len(tri) / count)
         if low > 0.0 and high < math.inf and not low < scale < high:
             scale = 0.5 * (low + high)
+    assert best is not None
     return best
 
 
-def _gmsh_once(mesh, P, field, scale, algorithm):
-    """One Gmsh run of :func:`run_gmsh` with the field times ``scale``."""
+def _gmsh_once(mesh, size, scale, algorithm):
+    """One Gmsh run on ``mesh.domain``'s nodes with ``size`` (a number, or a
+    callable h(xy)) times ``scale``."""
     import gmsh
 
+    P = np.asarray(mesh.domain.points)
     t0 = time.perf_counter()
     gmsh.initialize()
     gmsh.option.setNumber("General.Terminal", 0)
@@ -285,8 +306,12 @@ def _gmsh_once(mesh, P, field, scale, algorithm):
     gmsh.model.geo.synchronize()
     for _, tag in gmsh.model.getEntities(1):
         gmsh.model.mesh.setTransfiniteCurve(tag, 2)  # keep the given boundary nodes
-    gmsh.model.mesh.setSizeCallback(
-        lambda dim, tag, x, y, z, lc: float(field(np.array([[x, y]]))[0]) * scale)
+    if callable(size):
+        gmsh.model.mesh.setSizeCallback(
+            lambda dim, tag, x, y, z, lc: float(size(np.array([[x, y]]))[0]) * scale)
+    else:
+        gmsh.option.setNumber("Mesh.MeshSizeMin", size * scale)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", size * scale)
     for option in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
         gmsh.option.setNumber(f"Mesh.{option}", 0)
     gmsh.option.setNumber("Mesh.Algorithm", algorithm)
@@ -307,52 +332,121 @@ def _winners(rows, key, best):
     return "+".join(r["mesher"] for r in rows if r[key] == value)
 
 
-def quality_table(data, out_dir=None):
-    """bm.mesh, Gmsh Frontal-Delaunay and Triangle -pq30 at matched counts on
-    every case of :func:`cases`: per mesher N, N over the size field's
-    :func:`predicted_count`, min and mean radius ratio and the count below 0.7,
-    with the winners of each; printed, and written as quality_vs_gmsh.csv to
-    ``out_dir`` if given."""
+def big_disk(target=100_000):
+    """The benchmark's unit disk for ``target`` elements with bm.mesh's size
+    there, its boundary spacing (bubblemesh.studies.benchmark): a large,
+    uniform row set beside the small graded cases.  Returns (name, domain,
+    bm.mesh keyword arguments, uniform=True)."""
+    from .benchmark import _disk, boundary_nodes_for
+
+    n = boundary_nodes_for(target)
+    return (f"disk {target // 1000}k uniform", bm.Domain.from_loops(_disk(n)),
+            {"size": 2 * math.pi / n}, True)
+
+
+def table_cases(data, big=False):
+    """(name, domain, bm.mesh keyword arguments, uniform) for every case of
+    :func:`cases` (max_area = area / 200 for the corner-only ones), then with
+    ``big`` the :func:`big_disk`."""
+    for name, loops, kwargs in cases(data):
+        domain = bm.Domain.from_loops(loops)
+        yield name, domain, {"max_area": domain.area / 200} if kwargs == "per200" else kwargs, False
+    if big:
+        yield big_disk()
+
+
+def case_rows(name, domain, kwargs, uniform=False):
+    """bm.mesh(domain, **kwargs), then Gmsh Frontal-Delaunay and Triangle -pq30
+    on its refined boundary at its count (Gmsh with bm's size field, or with
+    ``uniform`` Gmsh's own constant size ``kwargs["size"]``): one row per
+    mesher, :func:`measure` plus the predicted count, N over it, and the
+    winners of mean, min and below 0.7."""
     from bubblemesh.pipeline import _user_size
     from bubblemesh.sizing import SizeField
 
-    header = ["case", "mesher", "N", "predicted", "N/predicted", "min", "mean", "below_0.7",
-              "wins_mean", "wins_min", "wins_below_0.7"]
-    print(f"{'case':26s} {'mesher':9s} {'N':>7s} {'N/pred':>6s} {'min':>6s} {'mean':>7s} "
-          f"{'<0.7':>5s}  winners (mean / min / <0.7)")
-    table = []
-    for name, loops, kwargs in cases(data):
-        domain = bm.Domain.from_loops(loops)
-        if kwargs == "per200":
-            kwargs = {"max_area": domain.area / 200}
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", bm.QualityWarning)
-            m = bm.mesh(domain, **kwargs)
-        field = SizeField.from_domain(domain, size=_user_size(kwargs.get("size"),
-                                                              kwargs.get("max_area")))
-        count = len(m.triangles)
-        predicted = predicted_count(domain, field).count
-        rows = []
-        for mesher, (p, t) in (("bm", (m.points, m.triangles)),
-                               ("gmsh", run_gmsh(m, field, count)[:2]),
-                               ("triangle", run_triangle(m, domain.hole_points, count))):
-            n, qmin, qmean, low = _stats(p, t)
-            rows.append(dict(case=name, mesher=mesher, N=n, min=round(qmin, 6),
-                             mean=round(qmean, 6), below=low, predicted=round(predicted, 1),
-                             ratio=round(n / predicted, 4)))
-        wins = (_winners(rows, "mean", max), _winners(rows, "min", max),
-                _winners(rows, "below", min))
-        for r in rows:
-            print(f"{name:26s} {r['mesher']:9s} {r['N']:7d} {r['ratio']:6.3f} {r['min']:6.4f} "
-                  f"{r['mean']:7.4f} {r['below']:5d}  {' / '.join(wins) if r is rows[0] else ''}")
-            table.append([name, r["mesher"], r["N"], r["predicted"], r["ratio"], r["min"],
-                          r["mean"], r["below"], *wins])
-    if out_dir is not None:
-        import csv
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", bm.QualityWarning)
+        m = bm.mesh(domain, **kwargs)
+    field = SizeField.from_domain(domain, size=_user_size(kwargs.get("size"),
+                                                          kwargs.get("max_area")))
+    count = len(m.triangles)
+    predicted = predicted_count(domain, field).count
+    gmsh = (run_gmsh_uniform(m, kwargs["size"], count) if uniform
+            else run_gmsh(m, field, count))
+    rows = []
+    for mesher, (p, t) in (("bm", (m.points, m.triangles)), ("gmsh", gmsh[:2]),
+                           ("triangle", run_triangle(m, domain.hole_points, count))):
+        r = measure(domain, p, t)
+        rows.append(dict(case=name, mesher=mesher, N=r["N"], predicted=round(predicted, 1),
+                         ratio=round(r["N"] / predicted, 4), min=round(r["min"], 6),
+                         mean=round(r["mean"], 6), below=r["below"],
+                         below_off_sharp=r["below_off_sharp"], valid=r["valid"]))
+    wins = (_winners(rows, "mean", max), _winners(rows, "min", max),
+            _winners(rows, "below", min))
+    for r in rows:
+        r.update(wins_mean=wins[0], wins_min=wins[1], wins_below=wins[2])
+    return rows
 
+
+# quality_vs_gmsh.csv's columns, and the row keys they hold
+COLUMNS = {"case": "case", "mesher": "mesher", "N": "N", "predicted": "predicted",
+           "N/predicted": "ratio", "min": "min", "mean": "mean", "below_0.7": "below",
+           "below_0.7_off_sharp": "below_off_sharp", "valid": "valid",
+           "wins_mean": "wins_mean", "wins_min": "wins_min", "wins_below_0.7": "wins_below"}
+
+
+def quality_table(data, out_dir=None, big=False):
+    """bm.mesh, Gmsh Frontal-Delaunay and Triangle -pq30 at matched counts on
+    every case of :func:`table_cases` (:func:`case_rows`): printed with the
+    winners and :func:`target_summary`, written as quality_vs_gmsh.csv to
+    ``out_dir`` if given; returns that table (a DataFrame)."""
+    import pandas as pd
+
+    print(f"{'case':26s} {'mesher':9s} {'N':>7s} {'N/pred':>6s} {'min':>6s} {'mean':>7s} "
+          f"{'<0.7':>5s} {'off':>4s} {'valid':>5s}  winners (mean / min / <0.7)")
+    rows = []
+    for name, domain, kwargs, uniform in table_cases(data, big):
+        case = case_rows(name, domain, kwargs, uniform)
+        for r in case:
+            wins = f"{r['wins_mean']} / {r['wins_min']} / {r['wins_below']}"
+            print(f"{name:26s} {r['mesher']:9s} {r['N']:7d} {r['ratio']:6.3f} {r['min']:6.4f} "
+                  f"{r['mean']:7.4f} {r['below']:5d} {r['below_off_sharp']:4d} "
+                  f"{str(r['valid']):>5s}  {wins if r is case[0] else ''}")
+        rows += case
+    table = pd.DataFrame([{column: r[key] for column, key in COLUMNS.items()} for r in rows])
+    print(target_summary(table))
+    if out_dir is not None:
         out_dir.mkdir(parents=True, exist_ok=True)
-        with (out_dir / "quality_vs_gmsh.csv").open("w", newline="") as f:
-            csv.writer(f).writerows([header, *table])
+        table.to_csv(out_dir / "quality_vs_gmsh.csv", index=False)
+    return table
+
+
+def target_verdicts(table):
+    """The project's targets for bm.mesh on each case of ``table``
+    (quality_vs_gmsh.csv as a DataFrame): {target: (cases met, cases missed)}.
+    The targets: mean and min radius ratio >= Gmsh Frontal's, no element below
+    0.7 except those touching an input corner sharper than SHARP_ANGLE (no
+    element there can reach 0.7), N within 5% of the predicted count."""
+    from bubblemesh.pipeline import SHARP_ANGLE
+
+    ours = table[table.mesher == "bm"].set_index("case")
+    gmsh = table[table.mesher == "gmsh"].set_index("case").loc[ours.index]
+    met = {"mean >= Gmsh's": ours["mean"] >= gmsh["mean"],
+           "min >= Gmsh's": ours["min"] >= gmsh["min"],
+           f"no element below 0.7 off corners under {math.degrees(SHARP_ANGLE):.1f} degrees":
+               ours["below_0.7_off_sharp"] == 0,
+           "N within 5% of the predicted count": (ours["N/predicted"] - 1).abs() <= 0.05}
+    return {target: (list(ok.index[ok]), list(ok.index[~ok])) for target, ok in met.items()}
+
+
+def target_summary(table) -> str:
+    """One line: on how many cases bm meets each of :func:`target_verdicts`,
+    naming the cases where it does not."""
+    parts = []
+    for target, (met, missed) in target_verdicts(table).items():
+        note = f" (not {', '.join(missed)})" if missed else ""
+        parts.append(f"{target} on {len(met)} of {len(met) + len(missed)}{note}")
+    return "bm meets: " + "; ".join(parts)
 
 
 def sweeps():
@@ -500,7 +594,10 @@ def timings(n=100_000, repeats=3):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=None)
-    parser.add_argument("--big", action="store_true")
+    parser.add_argument("--big", action="store_true",
+                        help="add the benchmark's 100k-element uniform disk to the table")
+    parser.add_argument("--timings", action="store_true",
+                        help="time bm.mesh against Gmsh on a 100k-element disk")
     parser.add_argument("--random", type=int, default=0, metavar="N",
                         help="also mesh N random corner-only polygons against Gmsh and Triangle")
     parser.add_argument("--seed", type=int, default=0, help="seed of the random polygons")
@@ -509,12 +606,12 @@ def main():
                         help="write quality_vs_gmsh.csv into this folder")
     args = parser.parse_args()
     if not args.skip_table:
-        quality_table(args.data, args.out)
+        quality_table(args.data, args.out, big=args.big)
     sweeps()
     size_test()
     if args.random:
         random_polygons(args.random, args.seed, args.out)
-    if args.big:
+    if args.timings:
         timings()
 
 
