@@ -593,7 +593,8 @@ def timings(n=100_000, repeats=3):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", type=Path, default=None)
+    parser.add_argument("--data", type=Path, default=None,
+                        help="folder with Triangle's A.poly and double_hex3.poly")
     parser.add_argument("--big", action="store_true",
                         help="add the benchmark's 100k-element uniform disk to the table")
     parser.add_argument("--timings", action="store_true",
@@ -603,7 +604,7 @@ def main():
     parser.add_argument("--seed", type=int, default=0, help="seed of the random polygons")
     parser.add_argument("--skip-table", action="store_true")
     parser.add_argument("--out", type=Path, default=None,
-                        help="write quality_vs_gmsh.csv into this folder")
+                        help="write quality_vs_gmsh.csv (and random_vs_gmsh.csv) here")
     args = parser.parse_args()
     if not args.skip_table:
         quality_table(args.data, args.out, big=args.big)
