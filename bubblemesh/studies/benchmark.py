@@ -154,8 +154,9 @@ def _child_mesh(n, repeats):
     spacing, which asks for the paper pipeline's element count (C_DISK n^2)."""
     import bubblemesh as bm
 
-    for _ in range(2):  # warm-up, as for the paper pipeline
-        bm.mesh(bm.Domain.from_loops(_disk(64)), size=2 * math.pi / 64)
+    for _ in range(2):  # warm-up, as for the paper pipeline, both kinds of §2 insertion
+        for insertion in ("centroid", "frontal"):
+            bm.mesh(bm.Domain.from_loops(_disk(64)), size=2 * math.pi / 64, insertion=insertion)
     base = _rss_mb()
     dom = bm.Domain.from_loops(_disk(n))
     seconds = []
@@ -169,7 +170,9 @@ def _child_mesh(n, repeats):
     phases = dict(m.optimization.phases)
     return [dict(method="bubblemesh_mesh", elements=len(m.triangles), seconds=min(seconds),
                  peak_mb=peak, peak_delta_mb=peak - base, phases=phases,
-                 note=f"size = boundary spacing; last run's phases: {_phases(phases)}")]
+                 note=f"size = boundary spacing, {m.generation.insertion} insertion, "
+                      f"{m.optimization.iterations} force iterations; last run's phases: "
+                      f"{_phases(phases)}")]
 
 
 PHASES = {  # bubblemesh's stats phase names, in words
