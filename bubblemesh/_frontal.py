@@ -24,6 +24,10 @@ frontal Delaunay refinement:
   holds it, reached by a walk that never crosses the boundary; where it
   cannot be placed so (outside the domain, on a node, not in the active
   triangle's circumcircle), the centroid is inserted as in the paper;
+- a node that would come closer than CROWD h to one of its neighbours is
+  not inserted: its triangle counts as accepted, the front moves on.  So
+  nodes keep at least CROWD times the smallest h apart, which bounds the
+  number of insertions whatever the input;
 - the run stops when no triangle is active: every triangle meets its bubble.
 
 Rows of nearly equilateral triangles grow from every wall and meet in a
@@ -59,6 +63,7 @@ ACCEPT = 1.35  # circumradius over the equilateral one at which a triangle is ac
 WALL_ACCEPT = 1.2  # the same on the walls
 WALL_FIRST = 4.0  # heap keys of wall triangles drop by this: below every other active key
 WALK_STEPS = 64  # a frontal node lies next to its triangle: a longer walk gives up
+CROWD = 0.35  # no new node closer than this times h to a neighbour
 SQRT3 = math.sqrt(3.0)
 
 
@@ -305,13 +310,20 @@ def frontal_loop(P, R, tri, nbr, con, vt, r_e, density, keys, ids, state, acc, m
             continue
         state[S_STAMP] += 1
         ncav, nb = find_cavity(P, x, y, s, tri, nbr, con, mark, state[S_STAMP], cav, bnd)
-        if ntri + nb - ncav > tri.shape[0] or size + nb > keys.shape[0]:
+        if ntri + nb - ncav > tri.shape[0] or size + nb + 3 > keys.shape[0]:
             size = heap_push(keys, ids, size, heap_key(nbr, density, t), t)  # retried first
             status = NEED_CAPACITY
             break
+        h = field_at(x, y, stack, *field)
+        if _crowded(P, bnd, nb, x, y, CROWD * h):
+            # no node this close to another: t stays as it is, and the front
+            # moves on past it (this also bounds the run: nodes keep apart)
+            density[t] = 1.0
+            size = _activate_around(tri, nbr, density, keys, ids, size, t)
+            continue
         P[npts, 0] = x
         P[npts, 1] = y
-        R[npts] = factor * field_at(x, y, stack, *field)
+        R[npts] = factor * h
         for j in range(ncav):  # the cavity's bubbles leave the sum (their slots are reused)
             _accumulate(acc, -_bubble_area(r_e, cav[j]))
         status, ntri_new = fill_cavity(P, npts, tri, nbr, con, vt, ntri, cav, ncav, bnd, nb,
@@ -329,6 +341,27 @@ def frontal_loop(P, R, tri, nbr, con, vt, r_e, density, keys, ids, state, acc, m
     state[S_NTRI] = ntri
     state[S_HEAP] = size
     return status
+
+
+@njit(cache=True)
+def _crowded(P, bnd, nb, x, y, reach):
+    """Is a node of the cavity's boundary (the new node's neighbours to be)
+    closer than ``reach`` to (x, y)?"""
+    for k in range(nb):
+        v = bnd[k, 0]
+        if v >= 0 and (P[v, 0] - x) ** 2 + (P[v, 1] - y) ** 2 < reach * reach:
+            return True
+    return False
+
+
+@njit(cache=True)
+def _activate_around(tri, nbr, density, keys, ids, size, t):
+    """t was just accepted: its neighbours that are not become active."""
+    for k in range(3):
+        n = nbr[t, k]
+        if n >= 0 and density[n] != UNSPLITTABLE and not _accepted(density, n):
+            size = heap_push(keys, ids, size, heap_key(nbr, density, n), n)
+    return size
 
 
 @njit(cache=True)

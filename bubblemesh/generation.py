@@ -59,7 +59,7 @@ def _physical_memory() -> int | None:
         return None
 
 
-def _refuse_beyond_memory(count: float, asker: str, bound: str, advice: str) -> None:
+def refuse_beyond_memory(count: float, asker: str, bound: str, advice: str) -> None:
     """MeshingError when ``count`` triangles would not fit in physical memory."""
     memory = _physical_memory()
     if memory is not None and count * BYTES_PER_TRIANGLE > memory:
@@ -72,7 +72,7 @@ def _refuse_beyond_memory(count: float, asker: str, bound: str, advice: str) -> 
 def _check_fits(area_geo: float, radii: np.ndarray) -> None:
     """MeshingError before allocating when even the fewest triangles eq. 6 could
     stop at (each bubble is at most pi r_max^2) do not fit in memory."""
-    _refuse_beyond_memory(
+    refuse_beyond_memory(
         area_geo / (math.pi * float(radii.max()) ** 2), "the boundary", "at least",
         f"its spacing (largest node bubble {float(radii.max()):.3g}) is far finer than the "
         f"domain (area {area_geo:.3g}); coarsen the boundary or pass max_insertions")
@@ -89,7 +89,7 @@ def _check_field_fits(points: np.ndarray, tri: np.ndarray, size_field) -> None:
     area = 0.5 * np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])
     samples = np.concatenate([corners, corners.mean(axis=1, keepdims=True)], axis=1)
     h = size_field(samples.reshape(-1, 2)).reshape(len(tri), 4).max(axis=1)
-    _refuse_beyond_memory(
+    refuse_beyond_memory(
         float(np.sum(area / (math.sqrt(3.0) / 4.0 * h * h))), "the size field", "about",
         f"its sizes (smallest {float(size_field.values.min()):.3g}) are far finer than the "
         "domain; pass a larger size")
@@ -170,7 +170,8 @@ def _generate(domain, max_insertions, progress, size_field, seeds=None, frontal=
         radii = np.concatenate([radii, size_field.radius(seeds)])
     tri, nbr = constrained_delaunay(points, domain.segments)  # (a)
     clock.lap("boundary_cdt")
-    if size_field is not None and max_insertions is None:
+    lattice = seeds is not None and len(seeds) > len(domain.points)  # the bulk is there
+    if size_field is not None and max_insertions is None and not lattice:
         _check_field_fits(points, np.asarray(tri), size_field)
     capped, field, factor, stack, r_field = _kernel_field(size_field)
     area_geo = float(domain.area)
@@ -184,6 +185,8 @@ def _generate(domain, max_insertions, progress, size_field, seeds=None, frontal=
     expected = int(area_geo / float(np.mean(math.pi * radii**2))) + len(tri)
     expected = min(expected, len(tri) + 2 * limit)
     t_cap = max(64, min(int(INITIAL_CAPACITY * expected), MAX_INITIAL_TRIANGLES) + 2 * len(tri))
+    if lattice:  # the mesh will be about the initial one
+        t_cap = max(64, int(INITIAL_CAPACITY * len(tri)) + 2 * len(domain.points))
     wide = not fits_int32(t_cap)
     try:
         ws = Workspace(points, radii, tri, nbr, len(points) + t_cap // 2 + 16, t_cap, wide)

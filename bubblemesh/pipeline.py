@@ -45,6 +45,7 @@ from ._corners import split_corners
 from ._flips import delaunay_flips, ideal_counts, improve_flips, segment_keys
 from ._forces import move
 from ._inside import boundary_clearance
+from ._lattice import lattice_points
 from ._mesh import GenerationStats, Mesh, OptimizationStats
 from ._odt import mean_polish, odt_smooth
 from ._rings import node_adjacency, ring_neighbors, vertex_triangles
@@ -53,7 +54,7 @@ from ._smoothing import compass_polish, guarded_smooth, stars, triangle_quality
 from ._verlet import VerletLists
 from .domain import Domain
 from .errors import GeometryError, MeshingError
-from .generation import generate_sized
+from .generation import generate_sized, refuse_beyond_memory
 from .refinement import refine_boundary
 from .sizing import _EQUILATERAL_RADIUS, SizeField, as_size_function
 from .timing import PhaseClock
@@ -89,6 +90,7 @@ MEAN_SWEEPS, MEAN_HALVINGS, MEAN_BELOW = 3, 4, 1.0  # 1.0: every star
 MEAN_STEPS = 3  # gradient steps per star visit before any compass search
 FRONTAL_ELEMENTS = 1000  # frontal insertion from this many elements of the cap size up
 ITERATIONS = {"centroid": 200, "frontal": 30}  # §3 force iterations by default
+LATTICE_MARGIN = 4.0  # the lattice keeps this many sizes off every boundary node
 
 
 class QualityWarning(UserWarning):
@@ -243,7 +245,7 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
         fine = refined.exact_only().to_domain()
     clock.lap("sizing")
     frontal = _frontal_wanted(insertion, domain, field)
-    seeds = None if frontal else _frontal_seeds(fine)
+    seeds = _lattice(fine, field) if frontal else _frontal_seeds(fine)
     try:
         generated = generate_sized(fine, field, progress=progress, seeds=seeds, frontal=frontal)
     except MemoryError:  # sizes far finer than the domain's extent
@@ -308,6 +310,19 @@ def _check_scale(domain, field):
         raise MeshingError(f"mesh: the domain spans {extent:.3g} but its smallest size is "
                            f"{smallest:.3g}, more than {MAX_SCALE:.0e} times smaller: rescale "
                            "or split the domain, or use paper=True")
+
+
+def _lattice(domain, field):
+    """The close-packed lattice of the field's cap over the bulk of the domain
+    (:mod:`bubblemesh._lattice`), refused in one line when it would not fit in
+    memory; None without a finite cap."""
+    cap = float(field.cap)
+    if not math.isfinite(cap):
+        return None
+    refuse_beyond_memory(domain.area / (math.sqrt(3) / 4 * cap * cap), "the size cap",
+                         "about", f"the cap {cap:.3g} is far finer than the domain; pass a "
+                         "larger size")
+    return lattice_points(domain.points, domain.segments, cap, LATTICE_MARGIN, field)
 
 
 def _frontal_seeds(domain):

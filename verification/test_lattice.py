@@ -1,0 +1,69 @@
+"""The close-packed start of the frontal §2 (bubblemesh._lattice) against an
+independent construction: the triangular lattice of spacing h anchored at
+the boundary's lower left corner, filtered with the exact point location of
+verification/oracles.py (strictly inside the domain), brute-force distances
+(at least margin h from every boundary node) and the size field (at its
+cap); the returned nodes must be exactly those, each within its 1e-9 h
+offset."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import oracles as O
+from hypothesis import given
+from hypothesis import strategies as st
+from test_pipeline import corner_domains
+
+import bubblemesh as bm
+from bubblemesh._lattice import JITTER, lattice_points
+from bubblemesh.refinement import refine_boundary
+from bubblemesh.sizing import SizeField
+
+
+def _expected(P, loops, h, margin, field):
+    lo, hi = P.min(axis=0), P.max(axis=0)
+    dy = math.sqrt(3) / 2 * h
+    nodes = [(lo[0] + i * h + (0.5 * h if j % 2 else 0.0), lo[1] + j * dy)
+             for j in range(int((hi[1] - lo[1]) / dy) + 1)
+             for i in range(-1, int((hi[0] - lo[0]) / h) + 2)]
+    nodes = np.array(nodes)
+    d = np.sqrt(((nodes[:, None, :] - P[None, :, :]) ** 2).sum(-1)).min(axis=1)
+    sure = np.abs(d - margin * h) > 1e-6 * h  # skip nodes on the margin's edge
+    keep = [k for k in np.flatnonzero(sure & (d >= margin * h))
+            if O.domain_location(P, loops, tuple(nodes[k])) > 0]
+    keep = [k for k in keep if field(nodes[k:k + 1])[0] >= h * (1 - 1e-12)]
+    return nodes[keep], nodes[~sure]
+
+
+@given(corner_domains(max_holes=2), st.sampled_from([0.3, 0.15]), st.floats(1.0, 3.0))
+def test_lattice_is_the_filtered_triangular_lattice(loops, h, margin):
+    domain = bm.Domain.from_loops(loops)
+    field = SizeField.from_domain(domain, size=h)
+    fine = refine_boundary(domain, field).to_domain()
+    P = np.asarray(fine.points)
+    got = lattice_points(P, fine.segments, h, margin, field)
+    want, unsure = _expected(P, fine.loops, h, margin, field)
+    for x in got:  # each returned node is a wanted one (or one on the margin's edge)
+        near = np.hypot(*(np.concatenate([want, unsure]) - x).T).min() if len(want) + len(
+            unsure) else np.inf
+        assert near <= 2 * JITTER * h * math.sqrt(2), f"{x} is not a lattice node kept"
+    for y in want:  # and each wanted node is returned
+        assert len(got) and np.hypot(*(got - y).T).min() <= 2 * JITTER * h * math.sqrt(2), y
+
+
+def test_no_lattice_where_the_field_is_below_its_cap():
+    """A fine hole makes the field grow from its spacing: no lattice node
+    where the field is still below the cap."""
+    t = np.linspace(0, 2 * np.pi, 200, endpoint=False)
+    hole = 0.1 * np.column_stack([np.cos(t), np.sin(t)])
+    outer = np.array([(-2, -2), (2, -2), (2, 2), (-2, 2)], float)
+    domain = bm.Domain.from_loops([outer, hole])
+    field = SizeField.from_domain(domain, size=0.1)
+    fine = refine_boundary(domain, field).to_domain()
+    got = lattice_points(fine.points, fine.segments, 0.1, 1.0, field)
+    assert len(got) > 1000
+    assert np.all(field(got) >= 0.1 * (1 - 1e-12))
+    # the field reaches the cap 0.1 only (0.1 - 0.0031) / 0.25 from the hole's nodes
+    assert np.hypot(*got.T).min() > 0.1 + (0.1 - 2 * np.pi * 0.1 / 200) / 0.25 * 0.99
