@@ -106,6 +106,51 @@ def test_verlet_lists_change_no_bit(case):
             assert np.array_equal(getattr(pruned, name), getattr(reference, name)), (
                 f"skin={skin} changed {name}")
 
+@pytest.mark.parametrize("beta", [0.0, 0.7])
+def test_move_step_is_eq8(beta):
+    """The eq. 8 step of the move kernel against the formula evaluated pair by
+    pair in plain Python: the bits of the documented one-division form
+    ((r_i + r_j) (1 / l) - 1, summed in list order) and, within rounding, the
+    paper's (r_i + r_j - l) / l.  Lists of odd and even length (the kernel
+    pairs entries up) and two coincident nodes (no force between them); no
+    boundary in reach, so every step is taken whole."""
+    import math
+
+    from bubblemesh._forces import move
+    from bubblemesh.optimization import node_adjacency, ring_neighbors
+
+    mesh = bm.generate(bm.Domain.from_loops(S.disk(40).loops))
+    n, n_b = len(mesh.points), mesh.n_boundary
+    ptr, idx = ring_neighbors(*node_adjacency(mesh.triangles, mesh.neighbors, n), n, 3)
+    X = np.array(mesh.points)
+    X[n_b + 1] = X[idx[ptr[n_b + 1]]]  # coincident with its first listed neighbour
+    R = np.asarray(mesh.radii) * 1.7
+    start, count = ptr[:-1].copy(), np.diff(ptr)
+    assert len(np.unique(count[n_b:] % 2)) == 2, "want lists of odd and even length"
+    rng = np.random.default_rng(1)
+    V = rng.normal(scale=1e-3, size=X.shape)
+    Xn, V_kernel = np.empty_like(X), V.copy()
+    home = np.zeros(n, np.int64)
+    move(X, R, Xn, home, start, count, idx.astype(np.int32), np.zeros(len(idx)), False, n_b,
+         0.2, X, mesh.triangles, mesh.neighbors, np.full(n, np.inf), X.copy(), R.copy(), 0.3,
+         V_kernel, beta)
+    for i in range(n_b, n):
+        fx = fy = gx = gy = 0.0
+        for j in idx[ptr[i]:ptr[i + 1]]:
+            dx, dy = float(X[i, 0] - X[j, 0]), float(X[i, 1] - X[j, 1])
+            length = math.sqrt(dx * dx + dy * dy)
+            w = 1.0 / length if length > 0.0 else 0.0
+            scale = max((R[i] + R[j]) * w - 1.0, 0.0)
+            fx, fy = fx + scale * dx, fy + scale * dy
+            paper = max((R[i] + R[j] - length) / length, 0.0) if length > 0.0 else 0.0
+            gx, gy = gx + paper * dx, gy + paper * dy
+        vx, vy = (beta * V[i, 0], beta * V[i, 1]) if beta > 0.0 else (0.0, 0.0)
+        expected = (X[i, 0] + 0.2 * fx + (0.2 / 0.2) * vx, X[i, 1] + 0.2 * fy + (0.2 / 0.2) * vy)
+        assert (Xn[i, 0], Xn[i, 1]) == expected, f"node {i}"
+        assert np.allclose(Xn[i], (X[i, 0] + 0.2 * gx + vx, X[i, 1] + 0.2 * gy + vy),
+                           rtol=0, atol=1e-12), f"node {i}"
+
+
 def test_optimize_does_not_mutate_its_input():
     case = S.square_with_hole()
     mesh = bm.generate(bm.Domain.from_loops(list(case.loops)))
