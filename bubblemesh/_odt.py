@@ -18,6 +18,7 @@ from numba import njit, prange
 
 from ._colouring import BLOCK, colour_classes
 from ._smoothing import gather_star, gathered_stats, shortest_edge, star_buffer
+from .simd import quotients
 
 STEPS = (1.0, 0.5, 0.25)
 COMPASS = 8
@@ -128,8 +129,16 @@ def _mean_gradient(buf, deg, px, py):
             continue
         s = a + b + c
         r = 4.0 * area2 * area2 / (s * a * b * c)
-        gx += r * (2.0 * (uy - vy) / area2 - (bx / b + cx / c) / s - bx / (b * b) - cx / (c * c))
-        gy += r * (2.0 * (vx - ux) / area2 - (by / b + cy / c) / s - by / (b * b) - cy / (c * c))
+        # both coordinates' divisions by the same length as one packed
+        # division each (simd.py): the divider bounds this loop
+        ax, ay = quotients(2.0 * (uy - vy), 2.0 * (vx - ux), area2, area2)
+        bx_b, by_b = quotients(bx, by, b, b)
+        cx_c, cy_c = quotients(cx, cy, c, c)
+        sx, sy = quotients(bx_b + cx_c, by_b + cy_c, s, s)
+        b2x, b2y = quotients(bx, by, b * b, b * b)
+        c2x, c2y = quotients(cx, cy, c * c, c * c)
+        gx += r * (ax - sx - b2x - c2x)
+        gy += r * (ay - sy - b2y - c2y)
     return gx, gy
 
 
@@ -192,7 +201,7 @@ def _mean_visit(X, triangles, ptr, idx, i, buf, floor, halvings, below, steps):
     if mean >= below:
         return 0
     need = max(min(worst, floor), 0.0)
-    step = 0.1 * shortest_edge(X, triangles, ptr, idx, i)
+    step = 0.1 * shortest_edge(buf, deg, X[i, 0], X[i, 1])
     mean, moves = _gradient_steps(X, i, buf, deg, step, steps, need, mean)
     if moves == 0:
         mean, moves = _compass(X, i, buf, deg, step, halvings, need, mean)

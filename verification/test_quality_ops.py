@@ -231,6 +231,102 @@ def test_a_gathered_star_rates_a_moved_node_like_the_reference(loops, seed):
             np.testing.assert_allclose([worst, mean], [q.min(), q.mean()], rtol=1e-12, atol=1e-12)
 
 
+def _star_rows(X, tri, star, i):
+    """Far corners (u, v) of node i's triangles, counter-clockwise."""
+    rows = []
+    for t in star:
+        k = list(tri[t]).index(i)
+        rows.append((tri[t, (k + 1) % 3], tri[t, (k + 2) % 3]))
+    return rows
+
+
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_the_shortest_edge_of_a_gathered_star_is_the_nearest_neighbours_hypot(loops, seed):
+    """shortest_edge (hypot only for near-shortest candidates) against the
+    kernels' hypot over every neighbour, bit for bit (and Python's within an
+    ulp), with the node moved, and at the centre of a regular hexagon (six
+    edges within rounding)."""
+    import math
+
+    from numba import njit
+
+    from bubblemesh._smoothing import shortest_edge
+
+    hypot = njit(lambda x, y: math.hypot(x, y))  # compiled: libm's, as in the kernel
+
+    m, _ = _sized(loops, 0.2)
+    X, tri = np.asarray(m.points), np.asarray(m.triangles)
+    ptr, idx = stars(tri, len(X))
+    buf = star_buffer(ptr)
+    rng = np.random.default_rng(seed)
+    for i in rng.integers(m.n_boundary, len(X), 10) if len(X) > m.n_boundary else ():
+        deg = gather_star(X, tri, ptr, idx, int(i), buf)
+        neighbours = {int(v) for t in idx[ptr[i]:ptr[i + 1]] for v in tri[t] if v != i}
+        for p in (X[i], *(X[i] + rng.uniform(-0.3, 0.3, (3, 2)) * m.radii[i])):
+            want = min(hypot(X[v, 0] - p[0], X[v, 1] - p[1]) for v in neighbours)
+            got = shortest_edge(buf, deg, p[0], p[1])
+            assert got == want
+            assert math.isclose(got, min(math.hypot(*(X[v] - p)) for v in neighbours),
+                                rel_tol=4e-16)
+    angles = np.arange(6) * np.pi / 3
+    hexagon = np.vstack([[0.1, 0.7], 0.1 + np.c_[np.cos(angles), 0.6 + np.sin(angles)]])
+    hexagon[0] = hexagon[1:].mean(axis=0)
+    fan = np.array([[0, k, k % 6 + 1] for k in range(1, 7)])
+    ptr, idx = stars(fan, 7)
+    deg = gather_star(hexagon, fan, ptr, idx, 0, buf)
+    want = min(hypot(*(hexagon[v] - hexagon[0])) for v in range(1, 7))
+    assert shortest_edge(buf, deg, hexagon[0, 0], hexagon[0, 1]) == want
+
+
+def _star_total(X, triangles, i, p):
+    """Sum of eq. 10 over ``triangles`` with node i at p (numpy reference)."""
+    Y = X.copy()
+    Y[i] = p
+    return O.radius_ratio_reference(Y, triangles).sum()
+
+
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_the_mean_gradient_is_the_derivative_of_the_star_ratios(loops, seed):
+    """The gradient of the sum of a star's radius ratios (the polish's
+    direction) against the analytic formula evaluated in plain Python, bit
+    for bit, and against central differences of eq. 10 (numpy)."""
+    from bubblemesh._odt import _mean_gradient
+
+    m, _ = _sized(loops, 0.2)
+    X, tri = np.asarray(m.points), np.asarray(m.triangles)
+    ptr, idx = stars(tri, len(X))
+    buf = star_buffer(ptr)
+    rng = np.random.default_rng(seed)
+    for i in rng.integers(m.n_boundary, len(X), 10) if len(X) > m.n_boundary else ():
+        deg = gather_star(X, tri, ptr, idx, int(i), buf)
+        star = idx[ptr[i]:ptr[i + 1]]
+        p = X[i] + rng.uniform(-0.1, 0.1, 2) * m.radii[i]
+        want = [0.0, 0.0]
+        for e, (u, v) in enumerate(_star_rows(X, tri, star, i)):
+            (ux, uy), (vx, vy) = X[u], X[v]
+            assert tuple(buf[e, :4]) == (ux, uy, vx, vy)
+            a = float(buf[e, 4])  # |uv|, gathered
+            assert abs(a - np.hypot(ux - vx, uy - vy)) <= 1e-15 * a
+            bx, by, cx, cy = p[0] - vx, p[1] - vy, p[0] - ux, p[1] - uy
+            b, c = float(np.sqrt(bx * bx + by * by)), float(np.sqrt(cx * cx + cy * cy))
+            area2 = (ux - p[0]) * (vy - p[1]) - (uy - p[1]) * (vx - p[0])
+            if area2 <= 0.0:
+                continue
+            s = a + b + c
+            r = 4.0 * area2 * area2 / (s * a * b * c)
+            want[0] += r * (2.0 * (uy - vy) / area2 - (bx / b + cx / c) / s - bx / (b * b)
+                            - cx / (c * c))
+            want[1] += r * (2.0 * (vx - ux) / area2 - (by / b + cy / c) / s - by / (b * b)
+                            - cy / (c * c))
+        got = _mean_gradient(buf, deg, p[0], p[1])
+        assert got == tuple(want)
+        h = 1e-6 * m.radii[i]
+
+        fd = [(_star_total(X, tri[star], i, p + d) - _star_total(X, tri[star], i, p - d)) / (2 * h)
+              for d in (np.array([h, 0]), np.array([0, h]))]
+        np.testing.assert_allclose(got, fd, rtol=1e-4, atol=1e-4 * np.abs(fd).max())
+
+
 @S.budget(15)
 @given(S.domains(max_holes=2, graded=True, min_spacing=0.2))
 def test_settled_meshes_of_graded_domains_are_valid_conforming_and_never_worse(case):
