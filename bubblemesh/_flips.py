@@ -22,7 +22,7 @@ visited in triangle order, passes repeat until none flips (at most
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ._smoothing import rho
 from .predicates import incircle, orient2d
@@ -30,18 +30,32 @@ from .predicates import incircle, orient2d
 GAIN = 1e-9  # a quality flip must raise the pair's worst ratio by more than this
 
 
-@njit(cache=True)
-def ideal_counts(X, triangles, n):
-    """Ideal triangle count at every node: its angle sum / (pi / 3), rounded, >= 1."""
-    total = np.zeros(n)
-    for t in range(triangles.shape[0]):
+@njit(cache=True, parallel=True)
+def _corner_angles(X, triangles):
+    """The angle of every triangle at each of its corners (the triangles in
+    parallel: atan2 is the cost)."""
+    angles = np.empty((triangles.shape[0], 3))
+    for t in prange(triangles.shape[0]):
         for k in range(3):
             i = triangles[t, k]
             j = triangles[t, (k + 1) % 3]
             m = triangles[t, (k + 2) % 3]
             ux, uy = X[j, 0] - X[i, 0], X[j, 1] - X[i, 1]
             vx, vy = X[m, 0] - X[i, 0], X[m, 1] - X[i, 1]
-            total[i] += math.atan2(abs(ux * vy - uy * vx), ux * vx + uy * vy)
+            angles[t, k] = math.atan2(abs(ux * vy - uy * vx), ux * vx + uy * vy)
+    return angles
+
+
+@njit(cache=True)
+def ideal_counts(X, triangles, n):
+    """Ideal triangle count at every node: its angle sum / (pi / 3), rounded,
+    >= 1.  The sums run in triangle order (rounding decides ties of the
+    count)."""
+    angles = _corner_angles(X, triangles)
+    total = np.zeros(n)
+    for t in range(triangles.shape[0]):
+        for k in range(3):
+            total[triangles[t, k]] += angles[t, k]
     ideal = np.empty(n, np.int64)
     for i in range(n):
         ideal[i] = max(1, int(round(total[i] / (math.pi / 3))))
@@ -169,6 +183,31 @@ def improve_flips(X, tri, nbr, keys, ideal, max_passes, relax):
         if flipped == 0:
             break
     return flips
+
+
+@njit(cache=True, parallel=True)
+def non_delaunay_edges(X, tri, nbr, keys):
+    """How many interior non-segment edges :func:`delaunay_flips` would find
+    non-Delaunay in its first look at each: 0 means it would flip nothing.
+    Each edge is tested once, from its lower-numbered triangle (the exact
+    :func:`incircle` of (c, a, b, d) and of (d, b, a, c) is the same
+    determinant), the triangles in parallel: after small moves most
+    triangulations are still Delaunay, and this settles it without the
+    serial queue."""
+    n = X.shape[0]
+    found = 0
+    for t in prange(tri.shape[0]):
+        for k in range(3):
+            u = nbr[t, k]
+            if u > t:
+                c = tri[t, k]
+                a = tri[t, (k + 1) % 3]
+                b = tri[t, (k + 2) % 3]
+                _, d = across(tri, t, k, u)
+                if incircle(X[c, 0], X[c, 1], X[a, 0], X[a, 1], X[b, 0], X[b, 1],
+                            X[d, 0], X[d, 1]) > 0.0 and not _is_segment(keys, n, a, b):
+                    found += 1
+    return found
 
 
 @njit(cache=True)

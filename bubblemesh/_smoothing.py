@@ -18,7 +18,7 @@ worst stars toward a local optimum of their smallest ratio.
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from .predicates import orient2d
 
@@ -141,11 +141,12 @@ def star_unchanged(triangles, ptr, idx, i, moved_at, seen_at):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def triangle_quality(X, triangles):
-    """Eq. 10 per triangle (0 for one that is not counter-clockwise)."""
+    """Eq. 10 per triangle (0 for one that is not counter-clockwise); the
+    triangles in parallel."""
     q = np.empty(triangles.shape[0])
-    for t in range(triangles.shape[0]):
+    for t in prange(triangles.shape[0]):
         a, b, c = triangles[t, 0], triangles[t, 1], triangles[t, 2]
         q[t] = rho(X[a, 0], X[a, 1], X[b, 0], X[b, 1], X[c, 0], X[c, 1])
     return q

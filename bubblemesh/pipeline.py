@@ -41,8 +41,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ._area_bound import FILL, bound_areas
+from ._coincident import shared_positions
 from ._corners import split_corners
-from ._flips import delaunay_flips, ideal_counts, improve_flips, segment_keys
+from ._flips import delaunay_flips, ideal_counts, improve_flips, non_delaunay_edges, segment_keys
 from ._forces import move
 from ._inside import boundary_clearance
 from ._mesh import GenerationStats, Mesh, OptimizationStats
@@ -333,13 +334,7 @@ def _separate(X, P0):
     the origin, where floats are coarse) go back to their distinct §2
     positions; each round reverts at least one node, so it ends."""
     for _ in range(len(X)):
-        order = np.lexsort((X[:, 1], X[:, 0]))  # equal points end up side by side
-        S = X[order]
-        same = (S[1:, 0] == S[:-1, 0]) & (S[1:, 1] == S[:-1, 1])
-        shared = np.zeros(len(X), dtype=bool)
-        shared[order[1:][same]] = True
-        shared[order[:-1][same]] = True
-        back = shared & np.any(X != P0, axis=1)
+        back = shared_positions(X) & np.any(X != P0, axis=1)
         if not back.any():
             return
         X[back] = P0[back]
@@ -356,11 +351,15 @@ def _retriangulate_unless_worse(X, segments, triangles, neighbors):
     """The CDT of the moved nodes, unless it lowers the smallest radius ratio
     (then the current connectivity stays: valid, since every move kept it so).
     The CDT comes from Lawson's flips on the current, valid connectivity (the
-    nodes moved a little, so few edges flip); a full CDT if they run long."""
-    tri, nbr = np.array(triangles), np.array(neighbors)
-    flips = delaunay_flips(X, tri, nbr, segment_keys(segments, len(X)), 4 * len(tri))
-    if flips == 0:
+    nodes moved a little, so few edges flip, often none); a full CDT if they
+    run long."""
+    keys = segment_keys(segments, len(X))
+    if non_delaunay_edges(X, triangles, neighbors, keys) == 0:
         return triangles, neighbors  # already the CDT
+    tri, nbr = np.array(triangles), np.array(neighbors)
+    flips = delaunay_flips(X, tri, nbr, keys, 4 * len(tri))
+    if flips == 0:
+        return triangles, neighbors
     if flips < 0:
         tri, nbr = _triangulate(X, segments)
     if triangle_quality(X, tri).min() >= triangle_quality(X, triangles).min():
@@ -368,13 +367,30 @@ def _retriangulate_unless_worse(X, segments, triangles, neighbors):
     return triangles, neighbors
 
 
-def _polish(X, triangles, neighbors, segments, n_b, rounds, sweeps, movable):
+class _Stars:
+    """:func:`stars` of the triangles array last asked for, kept by identity: a
+    re-triangulation that changes nothing returns the very array it was
+    given.  Only for arrays that nothing changes in place."""
+
+    def __init__(self):
+        self.triangles = None
+
+    def __call__(self, triangles, n):
+        if triangles is not self.triangles:
+            self.ptr, self.idx = stars(triangles, n)
+            self.triangles = triangles
+        return self.ptr, self.idx
+
+
+def _polish(X, triangles, neighbors, segments, n_b, rounds, sweeps, movable, star_of=None):
     """Guarded smoothing alternating with re-triangulation; a re-triangulation
     that would lower the smallest radius ratio is not taken (the smoothed
-    connectivity stays, valid by construction).  X is updated in place."""
+    connectivity stays, valid by construction).  X is updated in place.
+    ``star_of``: a :class:`_Stars` to share with the next step."""
+    star_of = star_of or _Stars()
     moves = 0
     for _ in range(rounds):
-        ptr, idx = stars(triangles, len(X))
+        ptr, idx = star_of(triangles, len(X))
         taken = guarded_smooth(X, triangles, ptr, idx, n_b, sweeps, movable)
         taken += compass_polish(X, triangles, ptr, idx, n_b, POOR, movable)
         moves += taken
@@ -392,7 +408,7 @@ def _node_sizes(mesh, X, size_field):
     return np.asarray(mesh.radii, dtype=np.float64) / _EQUILATERAL_RADIUS
 
 
-def _settle(X, triangles, neighbors, segments, n_b, h, movable):
+def _settle(X, triangles, neighbors, segments, n_b, h, movable, star_of=None):
     """Settle the nodes and the valences, never lowering the smallest radius
     ratio (each pass keeps every star at least min(its worst, max(mesh minimum,
     KEEP)); X in place): ODT (:mod:`bubblemesh._odt`) alternating with the CDT,
@@ -400,11 +416,12 @@ def _settle(X, triangles, neighbors, segments, n_b, h, movable):
     valid and conforming but need not be constrained-Delaunay) and corner
     splits (:mod:`bubblemesh._corners`), then gradient steps on each star's
     mean ratio (a compass search where they are blocked).  Returns (triangles,
-    neighbors, moves, flips)."""
+    neighbors, moves, flips).  ``star_of``: a :class:`_Stars` from the smoothing."""
+    star_of = star_of or _Stars()
     moves = 0
     for _ in range(ODT_ROUNDS):
         floor = max(float(triangle_quality(X, triangles).min(initial=1.0)), KEEP)
-        ptr, idx = stars(triangles, len(X))
+        ptr, idx = star_of(triangles, len(X))
         taken, _ = odt_smooth(X, triangles, ptr, idx, h, n_b, ODT_SWEEPS, movable, floor, 1e-3)
         moves += taken
         if taken == 0:
@@ -446,13 +463,15 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
     movable = np.ones(n, dtype=np.bool_)
     movable[np.unique(segments)] = False  # segment endpoints never move
     movable[:n_b] = False  # nor boundary nodes and free points
+    star_of = _Stars()
     triangles, neighbors, moves = _polish(X, triangles, neighbors, segments, n_b,
-                                          smoothing_rounds, smoothing_sweeps, movable)
+                                          smoothing_rounds, smoothing_sweeps, movable, star_of)
     settled, flips = 0, 0
     if settle:
         clock.lap("smoothing")
         triangles, neighbors, settled, flips = _settle(
-            X, triangles, neighbors, segments, n_b, _node_sizes(mesh, X, size_field), movable)
+            X, triangles, neighbors, segments, n_b, _node_sizes(mesh, X, size_field), movable,
+            star_of)
         clock.lap("settling")
     fallback = "none"
     for _ in range(8):  # the guarantee: revert the nodes of triangles below q0
@@ -469,7 +488,9 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
         movable[nodes] = False
         _separate(X, P0)  # a moved node may sit on a reverted one's §2 position
         triangles, neighbors = _triangulate(X, segments)
-    if triangle_quality(X, triangles).min(initial=1.0) < q0:
+        q = None  # the ratios of the mesh before this revert
+    q_final = float((q if q is not None else triangle_quality(X, triangles)).min(initial=1.0))
+    if q_final < q0:
         fallback = "generation"  # the §2 mesh, smoothed: never worse by construction
         X = P0.copy()
         triangles = np.array(mesh.triangles)
@@ -479,8 +500,8 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
         movable[:n_b] = False
         triangles, neighbors, moves = _polish(X, triangles, neighbors, segments, n_b,
                                               smoothing_rounds, smoothing_sweeps, movable)
+        q_final = float(triangle_quality(X, triangles).min(initial=1.0))
     clock.lap("smoothing")
-    q_final = float(triangle_quality(X, triangles).min(initial=1.0))
     stats = RobustOptimizationStats(
         iterations=iterations, max_displacement=largest, blocked_moves=blocked,
         list_builds=builds, list_layouts=0, amplification=amplification, rings=rings,

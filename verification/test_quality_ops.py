@@ -187,6 +187,34 @@ def test_delaunay_flips_turn_a_valid_mesh_into_the_constrained_delaunay_one(loop
         assert O.canonical_triangles(tri) == O.canonical_triangles(ref)
 
 
+@given(corner_domains(max_holes=2), st.integers(0, 2**32 - 1))
+def test_the_non_delaunay_edge_count_is_the_exact_local_test(loops, seed):
+    """non_delaunay_edges (each edge once, in parallel) counts the interior
+    non-segment edges the exact oracle finds not locally Delaunay: none on
+    the CDT, some after relaxed quality flips; delaunay_flips flips nothing
+    exactly when it is 0."""
+    from bubblemesh._flips import non_delaunay_edges
+    from bubblemesh.verify import delaunay as exact_delaunay
+    from bubblemesh.verify.exact import ExactPoints
+    from bubblemesh.verify.topology import HalfEdges
+
+    m, _ = _sized(loops, 0.2)
+    X = np.array(m.points)
+    tri, nbr = np.array(m.triangles), np.array(m.neighbors)
+    keys = segment_keys(np.asarray(m.segments), len(X))
+    rng = np.random.default_rng(seed)
+    for relax in (False, True):
+        if relax:
+            improve_flips(X, tri, nbr, keys, rng.integers(1, 8, len(X)), 3, 0.0)
+        H = HalfEdges(tri, len(X))
+        bad = exact_delaunay.local_violations(ExactPoints(X), H, np.ones(len(tri), bool),
+                                              np.asarray(m.segments).reshape(-1, 2))
+        edges = {(min(int(H.u[h]), int(H.v[h])), max(int(H.u[h]), int(H.v[h]))) for h in bad}
+        count = non_delaunay_edges(X, tri, nbr, keys)
+        assert count == len(edges)
+        assert (delaunay_flips(X, tri.copy(), nbr.copy(), keys, 4 * len(tri)) == 0) == (count == 0)
+
+
 def test_delaunay_flips_stop_at_their_bound():
     """A square split along the wrong diagonal needs one flip: with a bound of
     0 the kernel reports -1 and leaves the mesh as it was."""
