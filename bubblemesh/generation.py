@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from ._frontal import frontal_loop, init_front
 from ._insertion import S_CAVITY, S_HEAP, S_INSERTIONS, S_NPTS, S_NTRI, init_queue, insertion_loop
 from ._mesh import GenerationStats, Mesh
 from ._renumber import spatial_renumbering
@@ -84,7 +85,8 @@ def _check_field_fits(points: np.ndarray, tri: np.ndarray, size_field) -> None:
     and centroid: an underestimate wherever h varies inside a triangle, so a
     mesh that fits is never refused."""
     corners = points[tri]
-    area = 0.5 * np.abs(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]))
+    u, v = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    area = 0.5 * np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])
     samples = np.concatenate([corners, corners.mean(axis=1, keepdims=True)], axis=1)
     h = size_field(samples.reshape(-1, 2)).reshape(len(tri), 4).max(axis=1)
     _refuse_beyond_memory(
@@ -124,21 +126,24 @@ def _check_arguments(name: str, domain: Any, max_insertions: Any) -> None:
                          f"got {max_insertions!r}")
 
 
-def generate_sized(domain, size_field, *, max_insertions=None, progress=False, seeds=None):
+def generate_sized(domain, size_field, *, max_insertions=None, progress=False, seeds=None,
+                   frontal=False):
     """§2 driven by a size field as well as by the boundary (``bubblemesh.mesh``,
     not the paper): each element bubble is the eq. 2 radius of an equilateral
     triangle of side h(centroid) instead of eq. 3's interpolation, so eq. 6
     fills the domain to the field.  ``size_field`` is a :class:`bubblemesh.sizing.SizeField`;
     ``seeds`` (S, 2), points strictly inside the domain, are nodes of the
     initial triangulation with the field's bubbles (movable, numbered right
-    after the boundary nodes, in order)."""
+    after the boundary nodes, in order).  ``frontal``: insert frontally
+    (:mod:`bubblemesh._frontal`) until every triangle meets its bubble,
+    instead of at centroids until eq. 6."""
     from .sizing import SizeField
 
     _check_arguments("generate_sized", domain, max_insertions)
     if not isinstance(size_field, SizeField):
         raise TypeError(f"generate_sized: size_field must be a SizeField, got "
                         f"{type(size_field).__name__}")
-    return _generate(domain, max_insertions, progress, size_field, seeds)
+    return _generate(domain, max_insertions, progress, size_field, seeds, frontal)
 
 
 def _kernel_field(size_field):
@@ -154,7 +159,7 @@ def _kernel_field(size_field):
     return True, size_field.kernel_args(), _EQUILATERAL_RADIUS, stack, r_min
 
 
-def _generate(domain, max_insertions, progress, size_field, seeds=None):
+def _generate(domain, max_insertions, progress, size_field, seeds=None, frontal=False):
     """§2 of generate / generate_sized (the arguments checked)."""
     clock = PhaseClock()
     points = np.asarray(domain.points, dtype=np.float64)
@@ -171,6 +176,8 @@ def _generate(domain, max_insertions, progress, size_field, seeds=None):
     area_geo = float(domain.area)
     bound = _insertion_bound(area_geo, radii if not capped else
                              np.minimum(radii, r_field))
+    if frontal:  # no eq. 6: the front's nodes keep about h apart, a wide margin
+        bound = 4 * bound
     limit = bound if max_insertions is None else min(int(max_insertions), bound)
     if max_insertions is None:
         _check_fits(area_geo, radii)
@@ -186,12 +193,18 @@ def _generate(domain, max_insertions, progress, size_field, seeds=None):
     state = np.zeros(6, np.int64)
     state[S_NPTS] = len(points)
     state[S_NTRI] = len(tri)
-    state[S_HEAP] = init_queue(ws.P, ws.R, ws.tri, len(tri), ws.r_e, ws.density,
-                               ws.keys, ws.ids, acc, capped, field, factor, stack)
+    if frontal:
+        state[S_HEAP] = init_front(ws.P, ws.tri, ws.nbr, len(tri), ws.r_e, ws.density, ws.keys,
+                                   ws.ids, acc, factor, field, stack, _limits())
+        step = _frontal_step(factor, field, stack, _limits())
+    else:
+        state[S_HEAP] = init_queue(ws.P, ws.R, ws.tri, len(tri), ws.r_e, ws.density,
+                                   ws.keys, ws.ids, acc, capped, field, factor, stack)
+        step = _centroid_step(area_geo, (capped, field, factor, stack))
     bar = _progress_bar(progress, expected // 2)
     clock.lap("setup")
     try:
-        status = _run(ws, state, acc, area_geo, limit, bar, (capped, field, factor, stack))
+        status = _run(ws, state, acc, limit, bar, step)
     finally:
         if bar is not None:
             bar.close()
@@ -206,22 +219,45 @@ def _generate(domain, max_insertions, progress, size_field, seeds=None):
     stats = GenerationStats(
         insertions=int(state[S_INSERTIONS]), cavity_triangles=int(state[S_CAVITY]),
         bubble_area=float(acc[0] + acc[1]), domain_area=area_geo,
-        stop="population" if status == STOP_POPULATION else "max_insertions",
+        stop=("front" if frontal else "population") if status == STOP_POPULATION
+        else "max_insertions",
         seconds=clock.total(), phases=dict(clock.seconds))
     return Mesh(points=points, triangles=triangles, neighbors=neighbors, radii=radii,
                 segments=np.asarray(domain.segments, dtype=np.int64),
                 n_boundary=len(domain.points), domain=domain, generation=stats)
 
 
-def _run(ws, state, acc, area_geo, limit, bar, sizing):
+def _centroid_step(area_geo, sizing):
+    """The paper's kernel (centroids until eq. 6) as ``step(ws, state, acc, limit, chunk)``."""
+    def step(ws, state, acc, limit, chunk):
+        return insertion_loop(*ws.kernel_args(), state, acc, area_geo, limit, chunk, ws.mark,
+                              ws.cav, ws.bnd, ws.newt, ws.vstart, *sizing)
+    return step
+
+
+def _frontal_step(factor, field, stack, limits):
+    """The frontal kernel (:mod:`bubblemesh._frontal`) as ``step``."""
+    def step(ws, state, acc, limit, chunk):
+        return frontal_loop(*ws.kernel_args(), state, acc, limit, chunk, ws.mark, ws.cav,
+                            ws.bnd, ws.newt, ws.vstart, factor, field, stack, limits)
+    return step
+
+
+def _limits():
+    """The frontal kernel's acceptance thresholds, inside and on the walls."""
+    from . import _frontal
+
+    return np.array([_frontal.ACCEPT, _frontal.WALL_ACCEPT])
+
+
+def _run(ws, state, acc, limit, bar, step):
     """Call the kernel until it stops; every call inserts at least one node or
     follows a growth that did, so the loop ends within ``limit`` insertions."""
     chunk = 20000 if bar is not None else 1 << 62
     grown_without_progress = False
     while True:
         before = int(state[S_INSERTIONS])
-        status = insertion_loop(*ws.kernel_args(), state, acc, area_geo, limit, chunk,
-                                ws.mark, ws.cav, ws.bnd, ws.newt, ws.vstart, *sizing)
+        status = step(ws, state, acc, limit, chunk)
         progressed = int(state[S_INSERTIONS]) > before
         if bar is not None:
             bar.update(int(state[S_INSERTIONS]) - before)

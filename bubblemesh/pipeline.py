@@ -88,6 +88,8 @@ FLIP_PASSES = 20
 MAX_SCALE = 1e12  # largest domain extent over the smallest size that bm.mesh takes
 MEAN_SWEEPS, MEAN_HALVINGS, MEAN_BELOW = 3, 4, 1.0  # 1.0: every star
 MEAN_STEPS = 3  # gradient steps per star visit before any compass search
+FRONTAL_ELEMENTS = 1000  # frontal insertion from this many elements of the cap size up
+ITERATIONS = {"centroid": 200, "frontal": 30}  # §3 force iterations by default
 
 
 class QualityWarning(UserWarning):
@@ -97,11 +99,14 @@ class QualityWarning(UserWarning):
 @dataclass(frozen=True)
 class RobustGenerationStats(GenerationStats):
     """§2's record plus what the robust pipeline adds: ``warnings`` (one line
-    per corner too sharp for a radius ratio of 0.7), the input and refined
-    boundary node counts, the size field's smallest and largest source, the
-    number of frontal seeds (nodes n_boundary ... n_boundary + seeds - 1)."""
+    per corner too sharp for a radius ratio of 0.7), how §2 inserted
+    (``insertion``: "frontal" or "centroid"), the input and refined boundary
+    node counts, the size field's smallest and largest source, the number of
+    frontal seeds, or of the front's first row (nodes n_boundary ...
+    n_boundary + seeds - 1, held still by §3's forces)."""
 
     warnings: tuple[str, ...] = ()
+    insertion: str = "centroid"
     input_boundary_nodes: int = 0
     refined_boundary_nodes: int = 0
     size_range: tuple[float, float] = (0.0, 0.0)
@@ -200,18 +205,22 @@ def _check(name, value, ok, expected):
         raise ValueError(f"mesh: {name} must be {expected}, got {value!r}")
 
 
-def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterations=200,
-                tol=1e-3, amplification=1.7, alpha=0.2, momentum=0.7, rings=3,
-                smoothing_rounds=3, smoothing_sweeps=2, progress=False) -> Mesh:
+def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="auto",
+                max_iterations=None, tol=1e-3, amplification=1.7, alpha=0.2, momentum=0.7,
+                rings=3, smoothing_rounds=3, smoothing_sweeps=2, progress=False) -> Mesh:
     """The robust mesher (module docstring); :func:`bubblemesh.mesh` documents
     the arguments."""
     if not isinstance(domain, Domain):
         raise TypeError(f"mesh: domain must be a bubblemesh.Domain, got {type(domain).__name__}")
+    if insertion not in ("auto", "frontal", "centroid"):
+        raise ValueError(f"mesh: insertion must be 'auto', 'frontal' or 'centroid', "
+                         f"got {insertion!r}")
     _check("amplification", amplification, lambda v: 0 < v <= 2.0, "in (0, 2]")
     _check("alpha", alpha, lambda v: 0 < v <= 0.3, "in (0, 0.3]")
     _check("momentum", momentum, lambda v: 0 <= v < 1, "in [0, 1)")
     _check("tol", tol, lambda v: math.isfinite(v) and v >= 0, "finite and >= 0")
-    for name, value, top in (("max_iterations", max_iterations, None), ("rings", rings, 6),
+    for name, value, top in (("max_iterations", 0 if max_iterations is None else max_iterations,
+                              None), ("rings", rings, 6),
                              ("smoothing_rounds", smoothing_rounds, None),
                              ("smoothing_sweeps", smoothing_sweeps, None)):
         least = 1 if name == "rings" else 0
@@ -234,9 +243,10 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterati
     except GeometryError:  # a node an ulp off its segment touches a part a few ulps away
         fine = refined.exact_only().to_domain()
     clock.lap("sizing")
-    seeds = _frontal_seeds(fine)
+    frontal = _frontal_wanted(insertion, domain, field)
+    seeds = None if frontal else _frontal_seeds(fine)
     try:
-        generated = generate_sized(fine, field, progress=progress, seeds=seeds)
+        generated = generate_sized(fine, field, progress=progress, seeds=seeds, frontal=frontal)
     except MemoryError:  # sizes far finer than the domain's extent
         raise MeshingError("mesh: not enough memory for the mesh this size field asks for "
                            "(sizes far finer than the domain)") from None
@@ -248,8 +258,12 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterati
         warnings=notes, input_boundary_nodes=len(domain.points),
         refined_boundary_nodes=len(fine.points),
         size_range=(float(field.values.min()), float(field.values.max())),
-        seeds=0 if seeds is None else len(seeds))
+        seeds=0 if seeds is None else len(seeds), insertion="frontal" if frontal else "centroid")
     generated = replace(generated, generation=gen)
+    if frontal:
+        generated = _first_row_first(generated)
+    if max_iterations is None:
+        max_iterations = ITERATIONS[gen.insertion]
     clock.lap("generation")
     try:
         mesh = stable_optimize(generated, max_iterations=int(max_iterations), tol=float(tol),
@@ -267,6 +281,21 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, max_iterati
     except MemoryError:  # sizes far finer than the domain's extent
         raise MeshingError("mesh: not enough memory to optimise the mesh this size field "
                            "asks for (sizes far finer than the domain)") from None
+
+
+def _frontal_wanted(insertion, domain, field):
+    """Frontal insertion (:mod:`bubblemesh._frontal`) or the paper's centroids
+    for §2.  ``auto``: frontal where the field has a finite cap (a size the user
+    gave) and the domain holds at least FRONTAL_ELEMENTS equilateral triangles
+    of that size.  A front lays down rows of nearly equilateral triangles that
+    meet in a few seams, the lattice §3 can only approach from centroid
+    insertions; but every seam and corner costs a little, and in small domains,
+    or where the field grows all the way (no cap), the centroids relaxed by
+    §3's bubble forces do better (docs/performance.md has the measurements)."""
+    if insertion != "auto":
+        return insertion == "frontal"
+    cap = float(field.cap)
+    return math.isfinite(cap) and domain.area >= FRONTAL_ELEMENTS * math.sqrt(3) / 4 * cap * cap
 
 
 def _check_scale(domain, field):
@@ -511,3 +540,24 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
     return Mesh(points=X, triangles=triangles, neighbors=neighbors, radii=R, segments=segments,
                 n_boundary=n_b, domain=mesh.domain, generation=mesh.generation,
                 optimization=stats)
+
+
+def _first_row_first(mesh):
+    """The frontal §2 mesh renumbered so that its first row (the interior
+    nodes of the triangles that touch the boundary) comes right after the
+    boundary, counted as the record's seeds: §3's forces hold them still like
+    the frontal seeds of centroid insertion, for the same reason (released,
+    they leave boundary nodes with two right-angled triangles)."""
+    T = np.asarray(mesh.triangles)
+    n_b, n = mesh.n_boundary, len(mesh.points)
+    row = np.zeros(n, bool)
+    row[T[(T < n_b).any(axis=1)].ravel()] = True
+    row[:n_b] = False
+    rest = np.arange(n_b, n)[~row[n_b:]]
+    order = np.concatenate([np.arange(n_b), np.flatnonzero(row), rest])
+    new_id = np.empty(n, np.int64)
+    new_id[order] = np.arange(n)
+    return Mesh(points=np.asarray(mesh.points)[order], triangles=new_id[T],
+                neighbors=mesh.neighbors, radii=np.asarray(mesh.radii)[order],
+                segments=mesh.segments, n_boundary=n_b, domain=mesh.domain,
+                generation=replace(mesh.generation, seeds=int(row.sum())))

@@ -2,7 +2,8 @@
 threading layer, and safe to fork.
 
 - generate (its parallel renumbering), optimize (the §3 iterations, the
-  3-ring blocks) and bm.mesh (its colour-by-colour smoothing sweeps) give the
+  3-ring blocks) and bm.mesh, with frontal and with centroid insertion (its
+  colour-by-colour smoothing sweeps) give the
   same bits with 1 and 2 threads (results identical to the serial run), and
   with tbb (the ``fast`` extra) as with numba's workqueue;
 - after a mesh in the parent, a forked multiprocessing pool still meshes
@@ -35,8 +36,11 @@ def _meshes():
     assert len(mesh.points) > 2048, "too small to cut the ring blocks"
     optimized = bm.optimize(mesh, max_iterations=40)
     default = bm.mesh(_disk(200), size=0.02, max_iterations=40)  # the parallel sweeps too
+    assert default.generation.insertion == "frontal"
+    centroid = bm.mesh(_disk(200), size=0.02, max_iterations=40, insertion="centroid")
     return {f"{stage}_{name}": getattr(m, name)
-            for stage, m in (("generate", mesh), ("optimize", optimized), ("mesh", default))
+            for stage, m in (("generate", mesh), ("optimize", optimized), ("mesh", default),
+                             ("mesh_centroid", centroid))
             for name in ("points", "triangles", "neighbors", "radii")}
 
 

@@ -1,17 +1,22 @@
 """Quality study of the robust mesher bm.mesh against Triangle -pq30 and Gmsh
 Frontal-Delaunay (Mesh.Algorithm=6) on the same input at matched element counts.
 
-    python -m bubblemesh.studies.quality [--data DIR] [--out DIR] [--random N] [--big]
+    python -m bubblemesh.studies.quality [--data DIR] [--out DIR] [--big]
+                                         [--random N [--seed S]] [--timings]
 
 Gmsh and Triangle get bm's refined boundary nodes; Gmsh also bm's size field
 (scaled until the counts match within 3%).  ``--data``: a folder with
-Triangle's example A.poly and double_hex3.poly (skipped if absent).  Prints,
-per case, each mesher's element count (and bm's over what the size field
-predicts), minimum and mean radius ratio and count below 0.7, with the winners
-of each; ``--out`` writes that table as quality_vs_gmsh.csv.  Then the
-iteration sweeps, the size test, (``--random N``) N random corner-only
-polygons against Triangle with exact validity checks, and (``--big``) bm
-against Gmsh at 100k elements.
+Triangle's example A.poly and double_hex3.poly (skipped if absent); ``--big``
+adds the benchmark's 100k-element uniform disk (Gmsh with its own constant
+size).  Prints, per case and mesher, the element count and its ratio to the
+count the size field asks for (the integral of its element density over the
+domain, :func:`predicted_count`), the minimum and mean radius ratio, the count
+below 0.7 and how many of those do not touch an input corner too sharp for 0.7,
+bubblemesh.verify's verdict, the winners, and on how many cases bm meets each
+of the project's targets; ``--out`` writes that table as quality_vs_gmsh.csv.
+Then the iteration sweeps, the size test, (``--random N``) N random
+corner-only polygons against Gmsh and Triangle (random_vs_gmsh.csv with
+``--out``), and (``--timings``) bm against Gmsh's time at 100k elements.
 """
 
 from __future__ import annotations
@@ -20,6 +25,7 @@ import argparse
 import math
 import time
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -92,16 +98,136 @@ def _stats(points, triangles):
     return len(triangles), float(q.min()), float(q.mean()), int(np.sum(q < 0.7))
 
 
-def predicted_count(mesh, field):
-    """Elements the size field asks for: sum of area / (equilateral area of
-    side h(centroid)) over the mesh's triangles."""
-    p = np.asarray(mesh.points)
-    t = np.asarray(mesh.triangles)
-    a, b, c = p[t[:, 0]], p[t[:, 1]], p[t[:, 2]]
-    area = 0.5 * np.abs((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1])
-                        - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
-    h = field((a + b + c) / 3.0)
-    return float(np.sum(area / (math.sqrt(3) / 4 * h * h)))
+def _sharp_corner_flags(domain, points):
+    """True at the mesh points that are input corners sharper than
+    SHARP_ANGLE (every mesher here keeps input nodes bit for bit): an element
+    there cannot reach a radius ratio of 0.7."""
+    from bubblemesh.pipeline import SHARP_ANGLE, corner_angles
+
+    corners = np.asarray(domain.points)[corner_angles(domain) < SHARP_ANGLE]
+    return np.isin(points[:, 0] + 1j * points[:, 1], corners[:, 0] + 1j * corners[:, 1])
+
+
+def measure(domain, points, triangles):
+    """One mesh of ``domain``: element count N, min and mean radius ratio,
+    count below 0.7, that count without the elements touching an input corner
+    sharper than SHARP_ANGLE, and bubblemesh.verify's exact verdict on
+    validity and conformity to the input boundary (``valid``)."""
+    from bubblemesh import verify
+
+    p = np.asarray(points, dtype=np.float64)[:, :2]
+    t = np.asarray(triangles, dtype=np.int64)
+    q = radius_ratio(p, t)
+    poor = q < 0.7
+    at_sharp = _sharp_corner_flags(domain, p)[t].any(axis=1)
+    holes = domain.hole_points if len(domain.hole_points) else None
+    report = verify.check(p, t, domain.segments, domain.points, holes=holes, delaunay=False)
+    return dict(N=len(t), min=float(q.min()), mean=float(q.mean()), below=int(poor.sum()),
+                below_off_sharp=int((poor & ~at_sharp).sum()), valid=bool(report.ok))
+
+
+# The element density of a size field: equilateral triangles of side h per area.
+ELEMENT_DENSITY = 4.0 / math.sqrt(3.0)
+_S15 = math.sqrt(15.0)
+# Dunavant's degree-5 rule on a triangle: 7 interior points, positive weights summing to 1.
+_RULE_POINTS = np.array(
+    [[1 / 3, 1 / 3, 1 / 3]]
+    + [np.roll([(9 + 2 * _S15) / 21, (6 - _S15) / 21, (6 - _S15) / 21], k) for k in range(3)]
+    + [np.roll([(9 - 2 * _S15) / 21, (6 + _S15) / 21, (6 + _S15) / 21], k) for k in range(3)])
+_RULE_WEIGHTS = np.array([9 / 40] + [(155 - _S15) / 1200] * 3 + [(155 + _S15) / 1200] * 3)
+# A piece is "small against h" when its longest edge is at most h at its sample
+# points: the field's gradation g < 1 bounds how far h can dip between them.
+_PIECE_OVER_H = 1.0
+_MAX_ROUNDS = 400
+
+
+@dataclass(frozen=True)
+class CountPrediction:
+    """The element count a size field asks for on a domain: ``count`` =
+    integral of 4 / (sqrt(3) h(x)^2) over the domain, ``error`` the estimated
+    absolute error (sum over the pieces of |one-piece rule - two-halves rule|,
+    the error of the coarser rule, so an upper estimate), ``pieces`` how many
+    triangles the domain was cut into."""
+
+    count: float
+    error: float
+    pieces: int
+
+
+def _rule(corners, size):
+    """The degree-5 rule of the element density over each triangle of
+    ``corners`` (M, 3, 2): (integrals (M,), smallest h at the rule's points (M,))."""
+    xy = np.einsum("qk,mkd->mqd", _RULE_POINTS, corners).reshape(-1, 2)
+    h = np.asarray(size(xy), dtype=np.float64).reshape(len(corners), len(_RULE_WEIGHTS))
+    u, v = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    area = 0.5 * np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])
+    return area * (ELEMENT_DENSITY * _RULE_WEIGHTS / h**2).sum(axis=1), h.min(axis=1)
+
+
+def _bisect(corners):
+    """Each triangle of ``corners`` (M, 3, 2) cut at the midpoint of its longest
+    edge (longest-edge bisection keeps the pieces' angles bounded and shortens
+    slivers fastest): (halves (2M, 3, 2), pairs adjacent; longest edges (M,))."""
+    edges = np.stack([np.linalg.norm(corners[:, (k + 1) % 3] - corners[:, (k + 2) % 3], axis=1)
+                      for k in range(3)], axis=1)
+    k = edges.argmax(axis=1)  # the vertex opposite the longest edge
+    rows = np.arange(len(corners))
+    apex, b, c = (corners[rows, (k + j) % 3] for j in range(3))
+    mid = 0.5 * (b + c)
+    halves = np.stack([np.stack([apex, b, mid], 1), np.stack([apex, mid, c], 1)], axis=1)
+    return halves.reshape(-1, 3, 2), edges.max(axis=1)
+
+
+def predicted_count(domain, size, tol=1e-4) -> CountPrediction:
+    """The elements a size field asks for on ``domain``: the integral of the
+    element density 4 / (sqrt(3) h(x)^2) over the domain, independent of any
+    mesh being judged.
+
+    The domain's constrained Delaunay triangulation is cut by longest-edge
+    bisection, each piece integrated by a degree-5 rule and again as its two
+    halves; pieces are cut, largest difference first, until every piece is
+    small against h and the differences sum to at most ``tol`` of the total.
+    ``size`` maps (n, 2) points to (n,) sizes (a SizeField, any h(xy)).
+    Raises RuntimeError if that does not happen in a bounded number of rounds."""
+    from bubblemesh.triangulation import constrained_delaunay
+
+    points = np.asarray(domain.points, dtype=np.float64)
+    triangles, _ = constrained_delaunay(points, domain.segments)
+    pieces = points[triangles]
+    whole, hmin = _rule(pieces, size)
+    settled_value = settled_error = 0.0
+    settled = 0
+    for _ in range(_MAX_ROUNDS):
+        halves, longest = _bisect(pieces)
+        half_values, half_hmin = _rule(halves, size)
+        split = half_values.reshape(-1, 2).sum(axis=1)
+        difference = np.abs(split - whole)
+        total = settled_value + float(split.sum())
+        error = settled_error + float(difference.sum())
+        cut = longest > _PIECE_OVER_H * hmin
+        if error <= tol * total and not cut.any():
+            return CountPrediction(total, error, settled + 2 * len(pieces))
+        cut |= _largest_differences(difference, error - 0.5 * tol * total)
+        settled_value += float(split[~cut].sum())
+        settled_error += float(difference[~cut].sum())
+        settled += 2 * int((~cut).sum())
+        pieces = halves.reshape(-1, 2, 3, 2)[cut].reshape(-1, 3, 2)
+        whole = half_values.reshape(-1, 2)[cut].reshape(-1)
+        hmin = half_hmin.reshape(-1, 2)[cut].reshape(-1)
+    raise RuntimeError(f"predicted_count: not within {tol:g} after {_MAX_ROUNDS} rounds "
+                       f"(estimate {total:.6g} +- {error:.3g})")
+
+
+def _largest_differences(difference, excess):
+    """Mask of the fewest pieces, largest difference first, whose differences
+    sum to at least ``excess`` (none when excess <= 0)."""
+    mask = np.zeros(len(difference), dtype=bool)
+    if excess <= 0.0:
+        return mask
+    order = np.argsort(difference)[::-1]
+    k = int(np.searchsorted(np.cumsum(difference[order]), excess)) + 1
+    mask[order[:k]] = True
+    return mask
 
 
 def run_triangle(mesh, hole_points, count):
@@ -113,7 +239,8 @@ def run_triangle(mesh, hole_points, count):
     if len(hole_points):
         pts["holes"] = np.array(hole_points)
     for _ in range(5):  # match the element count
-        out = triangle.triangulate(pts, f"pq30a{area:.17g}Q")
+        # positional: Triangle would read the "e" of 3e-05 as its -e switch
+        out = triangle.triangulate(pts, f"pq30a{np.format_float_positional(area)}Q")
         n = len(out["triangles"])
         if abs(n - count) < 0.03 * count:
             break
@@ -123,13 +250,26 @@ def run_triangle(mesh, hole_points, count):
 
 def run_gmsh(mesh, field, count, algorithm=6):
     """Gmsh (Frontal-Delaunay by default) on bm's refined boundary nodes, no
-    further boundary splits, sizes from bm's size field times a factor tuned
-    until the element count is within 3% of count (else the closest of 12
-    runs).  Returns (points, triangles, seconds of that run)."""
-    P = np.asarray(mesh.domain.points)
+    further boundary splits, sizes from bm's size field (a Python callback)
+    times a factor tuned until the element count is within 3% of count (else
+    the closest of 12 runs).  Returns (points, triangles, seconds of that run)."""
+    return _tuned(count, lambda scale: _gmsh_once(mesh, field, scale, algorithm))
+
+
+def run_gmsh_uniform(mesh, size, count, algorithm=6):
+    """:func:`run_gmsh` for a constant size: Gmsh's own Mesh.MeshSizeMin =
+    MeshSizeMax = size times the tuned factor (a Python callback costs more
+    than the meshing at 100k elements)."""
+    return _tuned(count, lambda scale: _gmsh_once(mesh, float(size), scale, algorithm))
+
+
+def _tuned(count, run):
+    """The run(scale) -> (points, triangles, seconds) whose count is within 3%
+    of ``count`` (else the closest of 12): scale by the square root of the
+    count's ratio, bisecting once the target is bracketed."""
     scale, low, high, best = 1.0, 0.0, math.inf, None
     for _ in range(12):
-        pts, tri, seconds = _gmsh_once(mesh, P, field, scale, algorithm)
+        pts, tri, seconds = run(scale)
         if best is None or abs(len(tri) - count) < abs(len(best[1]) - count):
             best = (pts, tri, seconds)
         if abs(len(tri) - count) < 0.03 * count:
@@ -142,13 +282,16 @@ def run_gmsh(mesh, field, count, algorithm=6):
         scale *= math.sqrt(len(tri) / count)
         if low > 0.0 and high < math.inf and not low < scale < high:
             scale = 0.5 * (low + high)
+    assert best is not None
     return best
 
 
-def _gmsh_once(mesh, P, field, scale, algorithm):
-    """One Gmsh run of :func:`run_gmsh` with the field times ``scale``."""
+def _gmsh_once(mesh, size, scale, algorithm):
+    """One Gmsh run on ``mesh.domain``'s nodes with ``size`` (a number, or a
+    callable h(xy)) times ``scale``."""
     import gmsh
 
+    P = np.asarray(mesh.domain.points)
     t0 = time.perf_counter()
     gmsh.initialize()
     gmsh.option.setNumber("General.Terminal", 0)
@@ -163,8 +306,12 @@ def _gmsh_once(mesh, P, field, scale, algorithm):
     gmsh.model.geo.synchronize()
     for _, tag in gmsh.model.getEntities(1):
         gmsh.model.mesh.setTransfiniteCurve(tag, 2)  # keep the given boundary nodes
-    gmsh.model.mesh.setSizeCallback(
-        lambda dim, tag, x, y, z, lc: float(field(np.array([[x, y]]))[0]) * scale)
+    if callable(size):
+        gmsh.model.mesh.setSizeCallback(
+            lambda dim, tag, x, y, z, lc: float(size(np.array([[x, y]]))[0]) * scale)
+    else:
+        gmsh.option.setNumber("Mesh.MeshSizeMin", size * scale)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", size * scale)
     for option in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
         gmsh.option.setNumber(f"Mesh.{option}", 0)
     gmsh.option.setNumber("Mesh.Algorithm", algorithm)
@@ -185,47 +332,121 @@ def _winners(rows, key, best):
     return "+".join(r["mesher"] for r in rows if r[key] == value)
 
 
-def quality_table(data, out_dir=None):
+def big_disk(target=100_000):
+    """The benchmark's unit disk for ``target`` elements with bm.mesh's size
+    there, its boundary spacing (bubblemesh.studies.benchmark): a large,
+    uniform row set beside the small graded cases.  Returns (name, domain,
+    bm.mesh keyword arguments, uniform=True)."""
+    from .benchmark import _disk, boundary_nodes_for
+
+    n = boundary_nodes_for(target)
+    return (f"disk {target // 1000}k uniform", bm.Domain.from_loops(_disk(n)),
+            {"size": 2 * math.pi / n}, True)
+
+
+def table_cases(data, big=False):
+    """(name, domain, bm.mesh keyword arguments, uniform) for every case of
+    :func:`cases` (max_area = area / 200 for the corner-only ones), then with
+    ``big`` the :func:`big_disk`."""
+    for name, loops, kwargs in cases(data):
+        domain = bm.Domain.from_loops(loops)
+        yield name, domain, {"max_area": domain.area / 200} if kwargs == "per200" else kwargs, False
+    if big:
+        yield big_disk()
+
+
+def case_rows(name, domain, kwargs, uniform=False):
+    """bm.mesh(domain, **kwargs), then Gmsh Frontal-Delaunay and Triangle -pq30
+    on its refined boundary at its count (Gmsh with bm's size field, or with
+    ``uniform`` Gmsh's own constant size ``kwargs["size"]``): one row per
+    mesher, :func:`measure` plus the predicted count, N over it, and the
+    winners of mean, min and below 0.7."""
     from bubblemesh.pipeline import _user_size
     from bubblemesh.sizing import SizeField
 
-    header = ["case", "mesher", "N", "N/predicted", "min", "mean", "below_0.7",
-              "wins_mean", "wins_min", "wins_below_0.7"]
-    print(f"{'case':26s} {'mesher':9s} {'N':>7s} {'N/pred':>6s} {'min':>6s} {'mean':>7s} "
-          f"{'<0.7':>5s}  winners (mean / min / <0.7)")
-    table = []
-    for name, loops, kwargs in cases(data):
-        domain = bm.Domain.from_loops(loops)
-        if kwargs == "per200":
-            kwargs = {"max_area": domain.area / 200}
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", bm.QualityWarning)
-            m = bm.mesh(domain, **kwargs)
-        field = SizeField.from_domain(domain, size=_user_size(kwargs.get("size"),
-                                                              kwargs.get("max_area")))
-        count = len(m.triangles)
-        predicted = predicted_count(m, field)
-        rows = []
-        for mesher, (p, t) in (("bm", (m.points, m.triangles)),
-                               ("gmsh", run_gmsh(m, field, count)[:2]),
-                               ("triangle", run_triangle(m, domain.hole_points, count))):
-            n, qmin, qmean, low = _stats(p, t)
-            rows.append(dict(case=name, mesher=mesher, N=n, min=round(qmin, 4),
-                             mean=round(qmean, 4), below=low,
-                             ratio=round(n / predicted, 3)))
-        wins = (_winners(rows, "mean", max), _winners(rows, "min", max),
-                _winners(rows, "below", min))
-        for r in rows:
-            print(f"{name:26s} {r['mesher']:9s} {r['N']:7d} {r['ratio']:6.2f} {r['min']:6.3f} "
-                  f"{r['mean']:7.4f} {r['below']:5d}  {' / '.join(wins) if r is rows[0] else ''}")
-            table.append([name, r["mesher"], r["N"], r["ratio"], r["min"], r["mean"],
-                          r["below"], *wins])
-    if out_dir is not None:
-        import csv
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", bm.QualityWarning)
+        m = bm.mesh(domain, **kwargs)
+    field = SizeField.from_domain(domain, size=_user_size(kwargs.get("size"),
+                                                          kwargs.get("max_area")))
+    count = len(m.triangles)
+    predicted = predicted_count(domain, field).count
+    gmsh = (run_gmsh_uniform(m, kwargs["size"], count) if uniform
+            else run_gmsh(m, field, count))
+    rows = []
+    for mesher, (p, t) in (("bm", (m.points, m.triangles)), ("gmsh", gmsh[:2]),
+                           ("triangle", run_triangle(m, domain.hole_points, count))):
+        r = measure(domain, p, t)
+        rows.append(dict(case=name, mesher=mesher, N=r["N"], predicted=round(predicted, 1),
+                         ratio=round(r["N"] / predicted, 4), min=round(r["min"], 6),
+                         mean=round(r["mean"], 6), below=r["below"],
+                         below_off_sharp=r["below_off_sharp"], valid=r["valid"]))
+    wins = (_winners(rows, "mean", max), _winners(rows, "min", max),
+            _winners(rows, "below", min))
+    for r in rows:
+        r.update(wins_mean=wins[0], wins_min=wins[1], wins_below=wins[2])
+    return rows
 
+
+# quality_vs_gmsh.csv's columns, and the row keys they hold
+COLUMNS = {"case": "case", "mesher": "mesher", "N": "N", "predicted": "predicted",
+           "N/predicted": "ratio", "min": "min", "mean": "mean", "below_0.7": "below",
+           "below_0.7_off_sharp": "below_off_sharp", "valid": "valid",
+           "wins_mean": "wins_mean", "wins_min": "wins_min", "wins_below_0.7": "wins_below"}
+
+
+def quality_table(data, out_dir=None, big=False):
+    """bm.mesh, Gmsh Frontal-Delaunay and Triangle -pq30 at matched counts on
+    every case of :func:`table_cases` (:func:`case_rows`): printed with the
+    winners and :func:`target_summary`, written as quality_vs_gmsh.csv to
+    ``out_dir`` if given; returns that table (a DataFrame)."""
+    import pandas as pd
+
+    print(f"{'case':26s} {'mesher':9s} {'N':>7s} {'N/pred':>6s} {'min':>6s} {'mean':>7s} "
+          f"{'<0.7':>5s} {'off':>4s} {'valid':>5s}  winners (mean / min / <0.7)")
+    rows = []
+    for name, domain, kwargs, uniform in table_cases(data, big):
+        case = case_rows(name, domain, kwargs, uniform)
+        for r in case:
+            wins = f"{r['wins_mean']} / {r['wins_min']} / {r['wins_below']}"
+            print(f"{name:26s} {r['mesher']:9s} {r['N']:7d} {r['ratio']:6.3f} {r['min']:6.4f} "
+                  f"{r['mean']:7.4f} {r['below']:5d} {r['below_off_sharp']:4d} "
+                  f"{str(r['valid']):>5s}  {wins if r is case[0] else ''}")
+        rows += case
+    table = pd.DataFrame([{column: r[key] for column, key in COLUMNS.items()} for r in rows])
+    print(target_summary(table))
+    if out_dir is not None:
         out_dir.mkdir(parents=True, exist_ok=True)
-        with (out_dir / "quality_vs_gmsh.csv").open("w", newline="") as f:
-            csv.writer(f).writerows([header, *table])
+        table.to_csv(out_dir / "quality_vs_gmsh.csv", index=False)
+    return table
+
+
+def target_verdicts(table):
+    """The project's targets for bm.mesh on each case of ``table``
+    (quality_vs_gmsh.csv as a DataFrame): {target: (cases met, cases missed)}.
+    The targets: mean and min radius ratio >= Gmsh Frontal's, no element below
+    0.7 except those touching an input corner sharper than SHARP_ANGLE (no
+    element there can reach 0.7), N within 5% of the predicted count."""
+    from bubblemesh.pipeline import SHARP_ANGLE
+
+    ours = table[table.mesher == "bm"].set_index("case")
+    gmsh = table[table.mesher == "gmsh"].set_index("case").loc[ours.index]
+    met = {"mean >= Gmsh's": ours["mean"] >= gmsh["mean"],
+           "min >= Gmsh's": ours["min"] >= gmsh["min"],
+           f"no element below 0.7 off corners under {math.degrees(SHARP_ANGLE):.1f} degrees":
+               ours["below_0.7_off_sharp"] == 0,
+           "N within 5% of the predicted count": (ours["N/predicted"] - 1).abs() <= 0.05}
+    return {target: (list(ok.index[ok]), list(ok.index[~ok])) for target, ok in met.items()}
+
+
+def target_summary(table) -> str:
+    """One line: on how many cases bm meets each of :func:`target_verdicts`,
+    naming the cases where it does not."""
+    parts = []
+    for target, (met, missed) in target_verdicts(table).items():
+        note = f" (not {', '.join(missed)})" if missed else ""
+        parts.append(f"{target} on {len(met)} of {len(met) + len(missed)}{note}")
+    return "bm meets: " + "; ".join(parts)
 
 
 def sweeps():
@@ -263,49 +484,88 @@ def size_test():
               f"{np.mean((r >= 0.8) & (r <= 1.25)):.3f}, median {np.median(r):.3f}")
 
 
-def random_polygons(count=1000, seed=0):
-    """bm.mesh on ``count`` random corner-only polygons with 0-3 holes
-    (max_area = area / 200) against Triangle -pq30 at the area bound bm aims
-    at: every mesh checked exactly (bubblemesh.verify: validity and conformity),
-    bm's mean and minimum radius ratio, and whether its minimum reaches
-    Triangle's.  Returns the table (one row per polygon)."""
-    import pandas as pd
-    import triangle
-
-    from bubblemesh import verify
-    from bubblemesh._area_bound import FILL
-    from bubblemesh.pipeline import corner_angles
-
+def _random_domains(count, seed):
+    """``count`` random corner-only polygons with 0-3 holes, drawn from ``seed``
+    (self-touching draws skipped)."""
     rng = np.random.default_rng(seed)
-    rows = []
-    while len(rows) < count:
+    made = 0
+    while made < count:
         try:
             domain = bm.Domain.from_loops(_random_polygon(rng, int(rng.integers(0, 4))))
         except bm.GeometryError:
-            continue  # a self-touching draw
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", bm.QualityWarning)
-            m = bm.mesh(domain, max_area=domain.area / 200)
-        report = verify.check(m.points, m.triangles, domain.segments, domain.points,
-                              holes=domain.hole_points if len(domain.hole_points) else None,
-                              delaunay=False)
-        pts = dict(vertices=np.array(domain.points), segments=np.array(domain.segments))
-        if len(domain.hole_points):
-            pts["holes"] = np.array(domain.hole_points)
-        out = triangle.triangulate(pts, f"pq30a{FILL * domain.area / 200:.17g}Q")
-        _, qmin, qmean, _ = _stats(m.points, m.triangles)
-        _, tmin, tmean, _ = _stats(out["vertices"], out["triangles"])
-        rows.append(dict(valid=report.ok, N=len(m.triangles), min=qmin, mean=qmean,
-                         triangle_min=tmin, triangle_mean=tmean,
-                         sharpest=math.degrees(float(corner_angles(domain).min()))))
-    df = pd.DataFrame(rows)
-    print(f"{len(df)} random corner-only polygons (seed {seed}): {int(df.valid.sum())} valid "
-          f"and conforming; mean ratio >= 0.95 on {int((df['mean'] >= 0.95).sum())} (lowest "
-          f"{df['mean'].min():.4f}, median {df['mean'].median():.4f}); minimum >= Triangle "
-          f"-pq30's on {int((df['min'] >= df.triangle_min).sum())}; minimum below 0.5 on "
-          f"{int((df['min'] < 0.5).sum())} ({int(((df['min'] < 0.5) & (df.sharpest < 30)).sum())}"
-          " at a corner under 30 degrees)")
+            continue
+        made += 1
+        yield domain
+
+
+def _random_row(domain):
+    """bm.mesh (max_area = area / 200), Gmsh Frontal-Delaunay and Triangle
+    -pq30 (both on bm's refined boundary at bm's count, Gmsh with bm's size
+    field) on one polygon: :func:`measure` of each as ``<key>_<mesher>``, the
+    predicted count and N over it for bm and Gmsh, the sharpest corner."""
+    from bubblemesh.pipeline import _user_size, corner_angles
+    from bubblemesh.sizing import SizeField
+
+    max_area = domain.area / 200
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", bm.QualityWarning)
+        m = bm.mesh(domain, max_area=max_area)
+    field = SizeField.from_domain(domain, size=_user_size(None, max_area))
+    count = len(m.triangles)
+    predicted = predicted_count(domain, field).count
+    row = dict(holes=len(domain.loops) - 1, predicted=predicted,
+               sharpest=math.degrees(float(corner_angles(domain).min())))
+    for mesher, (p, t) in (("bm", (m.points, m.triangles)),
+                           ("gmsh", run_gmsh(m, field, count)[:2]),
+                           ("triangle", run_triangle(m, domain.hole_points, count))):
+        row.update({f"{k}_{mesher}": v for k, v in measure(domain, p, t).items()})
+    row["ratio_bm"] = row["N_bm"] / predicted
+    row["ratio_gmsh"] = row["N_gmsh"] / predicted
+    return row
+
+
+def random_polygons(count=1000, seed=0, out_dir=None):
+    """bm.mesh on ``count`` random corner-only polygons with 0-3 holes
+    (max_area = area / 200) against Gmsh Frontal-Delaunay and Triangle -pq30
+    at matched counts (:func:`_random_row`), every mesh checked exactly
+    (bubblemesh.verify: validity and conformity).  Prints the wins of bm over
+    Gmsh (mean, min) and every polygon bm loses with its margins; returns the
+    table (one row per polygon), written as random_vs_gmsh.csv to ``out_dir``
+    if given."""
+    import pandas as pd
+
+    df = pd.DataFrame([_random_row(d) for d in _random_domains(count, seed)])
+    df.index.name = "polygon"
+    _print_random_summary(df, seed)
+    if out_dir is not None:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        df.to_csv(out_dir / "random_vs_gmsh.csv")
     return df
+
+
+def _print_random_summary(df, seed):
+    """The random-polygon verdicts against Gmsh, then the polygons bm loses."""
+    n = len(df)
+    valid = ", ".join(f"{m} {int(df[f'valid_{m}'].sum())}" for m in ("bm", "gmsh", "triangle"))
+    mean_wins = df.mean_bm >= df.mean_gmsh
+    min_wins = df.min_bm >= df.min_gmsh
+    within = {m: int((abs(df[f"ratio_{m}"] - 1) <= 0.05).sum()) for m in ("bm", "gmsh")}
+    print(f"{n} random corner-only polygons (seed {seed}); valid and conforming: {valid}")
+    print(f"bm against Gmsh Frontal: mean >= Gmsh's on {int(mean_wins.sum())} of {n} (average "
+          f"{df.mean_bm.mean():.4f} against {df.mean_gmsh.mean():.4f}), min >= Gmsh's on "
+          f"{int(min_wins.sum())} of {n} (average {df.min_bm.mean():.4f} against "
+          f"{df.min_gmsh.mean():.4f}); min >= Triangle's on "
+          f"{int((df.min_bm >= df.min_triangle).sum())}")
+    print(f"no element below 0.7 away from corners sharper than the limit: bm "
+          f"{int((df.below_off_sharp_bm == 0).sum())}, gmsh "
+          f"{int((df.below_off_sharp_gmsh == 0).sum())} of {n}; N within 5% of the "
+          f"prediction: bm {within['bm']}, gmsh {within['gmsh']} of {n} (median N/predicted "
+          f"bm {df.ratio_bm.median():.3f}, gmsh {df.ratio_gmsh.median():.3f})")
+    for i, r in df[~(mean_wins & min_wins)].iterrows():
+        print(f"  polygon {i}: mean {r.mean_bm:.4f} vs {r.mean_gmsh:.4f} "
+              f"({r.mean_bm - r.mean_gmsh:+.4f}), min {r.min_bm:.4f} vs {r.min_gmsh:.4f} "
+              f"({r.min_bm - r.min_gmsh:+.4f}); N {r.N_bm} / {r.N_gmsh}, {r.holes} holes, "
+              f"sharpest corner {r.sharpest:.1f} degrees")
 
 
 def timings(n=100_000, repeats=3):
@@ -333,21 +593,26 @@ def timings(n=100_000, repeats=3):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--data", type=Path, default=None)
-    parser.add_argument("--big", action="store_true")
+    parser.add_argument("--data", type=Path, default=None,
+                        help="folder with Triangle's A.poly and double_hex3.poly")
+    parser.add_argument("--big", action="store_true",
+                        help="add the benchmark's 100k-element uniform disk to the table")
+    parser.add_argument("--timings", action="store_true",
+                        help="time bm.mesh against Gmsh on a 100k-element disk")
     parser.add_argument("--random", type=int, default=0, metavar="N",
-                        help="also mesh N random corner-only polygons against Triangle")
+                        help="also mesh N random corner-only polygons against Gmsh and Triangle")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the random polygons")
     parser.add_argument("--skip-table", action="store_true")
     parser.add_argument("--out", type=Path, default=None,
-                        help="write quality_vs_gmsh.csv into this folder")
+                        help="write quality_vs_gmsh.csv (and random_vs_gmsh.csv) here")
     args = parser.parse_args()
     if not args.skip_table:
-        quality_table(args.data, args.out)
+        quality_table(args.data, args.out, big=args.big)
     sweeps()
     size_test()
     if args.random:
-        random_polygons(args.random)
-    if args.big:
+        random_polygons(args.random, args.seed, args.out)
+    if args.timings:
         timings()
 
 
