@@ -126,6 +126,22 @@ def gathered_stats(buf, deg, px, py):
 
 
 @njit(cache=True)
+def gathered_beats(buf, deg, px, py, bar):
+    """``gathered_stats(buf, deg, px, py)[0] > bar``, stopping at the first
+    triangle that decides it: one not counter-clockwise or with a radius
+    ratio not above ``bar`` (most guarded moves fail, often early)."""
+    if bar >= 1.0:
+        return False  # the smallest ratio starts at 1
+    for e in range(deg):
+        ux, uy, vx, vy = buf[e, 0], buf[e, 1], buf[e, 2], buf[e, 3]
+        if orient2d(px, py, ux, uy, vx, vy) <= 0.0:
+            return False
+        if rho_opposite(px, py, ux, uy, vx, vy, buf[e, 4]) <= bar:
+            return False
+    return True
+
+
+@njit(cache=True)
 def star_unchanged(triangles, ptr, idx, i, moved_at, seen_at):
     """True if neither node i nor a node of its star has moved since i was
     last looked at (visit ``seen_at[i]``; ``moved_at``: the visit of each
@@ -187,7 +203,7 @@ def guarded_smooth(X, triangles, ptr, idx, n_boundary, sweeps, movable):
             for step in STEPS:
                 px = X[i, 0] + step * (tx - X[i, 0])
                 py = X[i, 1] + step * (ty - X[i, 1])
-                if gathered_stats(buf, deg, px, py)[0] > before:
+                if gathered_beats(buf, deg, px, py, before):
                     X[i, 0] = px
                     X[i, 1] = py
                     moved += 1
@@ -242,11 +258,10 @@ def compass_polish(X, triangles, ptr, idx, n_boundary, poor, movable):
                     a = 2.0 * math.pi * d / COMPASS
                     px = X[i, 0] + step * math.cos(a)
                     py = X[i, 1] + step * math.sin(a)
-                    q = gathered_stats(buf, deg, px, py)[0]
-                    if q > best:
+                    if gathered_beats(buf, deg, px, py, best):
                         X[i, 0] = px
                         X[i, 1] = py
-                        best = q
+                        best = gathered_stats(buf, deg, px, py)[0]
                         improved = True
                         taken += 1
                         break

@@ -259,6 +259,27 @@ def test_a_gathered_star_rates_a_moved_node_like_the_reference(loops, seed):
             np.testing.assert_allclose([worst, mean], [q.min(), q.mean()], rtol=1e-12, atol=1e-12)
 
 
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_the_early_exit_rating_decides_like_the_full_one(loops, seed):
+    """gathered_beats (stops at the first deciding triangle) says whether the
+    star's smallest ratio beats a bar exactly as the full rating does: bars
+    around that ratio, 0, 1, and moves that turn triangles over."""
+    from bubblemesh._smoothing import gathered_beats
+
+    m, _ = _sized(loops, 0.2)
+    X, tri = np.asarray(m.points), np.asarray(m.triangles)
+    ptr, idx = stars(tri, len(X))
+    buf = star_buffer(ptr)
+    rng = np.random.default_rng(seed)
+    for i in rng.integers(m.n_boundary, len(X), 10) if len(X) > m.n_boundary else ():
+        deg = gather_star(X, tri, ptr, idx, int(i), buf)
+        for p in X[i] + rng.uniform(-0.6, 0.6, (5, 2)) * m.radii[i]:
+            worst = gathered_stats(buf, deg, p[0], p[1])[0]
+            for bar in (0.0, 1.0, worst, np.nextafter(worst, 0.0), np.nextafter(worst, 1.0),
+                        rng.uniform(0.3, 1.0)):
+                assert gathered_beats(buf, deg, p[0], p[1], bar) == (worst > bar)
+
+
 def _star_rows(X, tri, star, i):
     """Far corners (u, v) of node i's triangles, counter-clockwise."""
     rows = []
