@@ -43,7 +43,15 @@ import numpy as np
 from ._area_bound import FILL, bound_areas
 from ._coincident import shared_positions
 from ._corners import split_corners
-from ._flips import delaunay_flips, ideal_counts, improve_flips, non_delaunay_edges, segment_keys
+from ._flips import (
+    delaunay_flips,
+    ideal_counts,
+    improve_flips,
+    lawson_flips,
+    non_delaunay_mask,
+    segment_keys,
+    turned_over,
+)
 from ._forces import move
 from ._inside import boundary_clearance
 from ._mesh import GenerationStats, Mesh, OptimizationStats
@@ -376,6 +384,22 @@ def _triangulate(X, segments):
         raise MeshingError(f"mesh: re-triangulation failed: {error}") from error
 
 
+def _retriangulate_moved(X, mesh, segments):
+    """§3.5's re-triangulation after the forces: Lawson's flips from the §2
+    connectivity when the forces turned no triangle over (exact orientation;
+    the boundary nodes stay, so it is still a valid triangulation of the
+    domain, and the flips reach its constrained Delaunay triangulation, the
+    triangles a fresh build gives when that is unique), else a fresh CDT.
+    After the frontal §2 and its few force iterations hardly an edge flips."""
+    tri, nbr = np.array(mesh.triangles), np.array(mesh.neighbors)
+    if turned_over(X, tri) == 0:
+        keys = segment_keys(segments, len(X))
+        first = np.flatnonzero(non_delaunay_mask(X, tri, nbr, keys))
+        if lawson_flips(X, tri, nbr, keys, 4 * len(tri), first) >= 0:
+            return tri, nbr
+    return _triangulate(X, segments)
+
+
 def _retriangulate_unless_worse(X, segments, triangles, neighbors):
     """The CDT of the moved nodes, unless it lowers the smallest radius ratio
     (then the current connectivity stays: valid, since every move kept it so).
@@ -383,7 +407,7 @@ def _retriangulate_unless_worse(X, segments, triangles, neighbors):
     nodes moved a little, so few edges flip, often none); a full CDT if they
     run long."""
     keys = segment_keys(segments, len(X))
-    if non_delaunay_edges(X, triangles, neighbors, keys) == 0:
+    if not non_delaunay_mask(X, triangles, neighbors, keys).any():
         return triangles, neighbors  # already the CDT
     tri, nbr = np.array(triangles), np.array(neighbors)
     flips = delaunay_flips(X, tri, nbr, keys, 4 * len(tri))
@@ -488,7 +512,7 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
                                                       momentum)
     _separate(X, P0)
     clock.lap("forces")
-    triangles, neighbors = _triangulate(X, segments)
+    triangles, neighbors = _retriangulate_moved(X, mesh, segments)
     movable = np.ones(n, dtype=np.bool_)
     movable[np.unique(segments)] = False  # segment endpoints never move
     movable[:n_b] = False  # nor boundary nodes and free points

@@ -188,12 +188,13 @@ def test_delaunay_flips_turn_a_valid_mesh_into_the_constrained_delaunay_one(loop
 
 
 @given(corner_domains(max_holes=2), st.integers(0, 2**32 - 1))
-def test_the_non_delaunay_edge_count_is_the_exact_local_test(loops, seed):
-    """non_delaunay_edges (each edge once, in parallel) counts the interior
-    non-segment edges the exact oracle finds not locally Delaunay: none on
-    the CDT, some after relaxed quality flips; delaunay_flips flips nothing
-    exactly when it is 0."""
-    from bubblemesh._flips import non_delaunay_edges
+def test_the_non_delaunay_mask_is_the_exact_local_test(loops, seed):
+    """non_delaunay_mask (each edge once, in parallel) marks the interior
+    non-segment edges the exact oracle finds not locally Delaunay: none on the
+    CDT, some after relaxed quality flips.  Lawson's flips seeded with just
+    those edges reach a constrained Delaunay triangulation (exact oracle), the
+    same triangles as the flips that look at every edge when it is unique."""
+    from bubblemesh._flips import lawson_flips, non_delaunay_mask
     from bubblemesh.verify import delaunay as exact_delaunay
     from bubblemesh.verify.exact import ExactPoints
     from bubblemesh.verify.topology import HalfEdges
@@ -209,10 +210,39 @@ def test_the_non_delaunay_edge_count_is_the_exact_local_test(loops, seed):
         H = HalfEdges(tri, len(X))
         bad = exact_delaunay.local_violations(ExactPoints(X), H, np.ones(len(tri), bool),
                                               np.asarray(m.segments).reshape(-1, 2))
-        edges = {(min(int(H.u[h]), int(H.v[h])), max(int(H.u[h]), int(H.v[h]))) for h in bad}
-        count = non_delaunay_edges(X, tri, nbr, keys)
-        assert count == len(edges)
-        assert (delaunay_flips(X, tri.copy(), nbr.copy(), keys, 4 * len(tri)) == 0) == (count == 0)
+        want = {(min(int(H.u[h]), int(H.v[h])), max(int(H.u[h]), int(H.v[h]))) for h in bad}
+        marked = np.argwhere(non_delaunay_mask(X, tri, nbr, keys))
+        got = [tuple(sorted((int(tri[t, (k + 1) % 3]), int(tri[t, (k + 2) % 3]))))
+               for t, k in marked]
+        assert len(got) == len(set(got)) and set(got) == want
+    seeded, s_nbr = tri.copy(), nbr.copy()
+    first = np.flatnonzero(non_delaunay_mask(X, tri, nbr, keys))
+    assert lawson_flips(X, seeded, s_nbr, keys, 4 * len(tri), first) >= len(want) > 0
+    O.check_valid(X, seeded, s_nbr)
+    O.check_constrained_delaunay(X, seeded, m.segments)
+    delaunay_flips(X, tri, nbr, keys, 4 * len(tri))
+    if O.delaunay_is_unique(X, tri, m.segments):
+        assert O.canonical_triangles(seeded) == O.canonical_triangles(tri)
+
+
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_turned_over_counts_the_triangles_not_counter_clockwise(loops, seed):
+    """turned_over against exact rational orientation, with nodes moved at
+    random (some triangles turned over, some made flat)."""
+    from bubblemesh._flips import turned_over
+
+    m, _ = _sized(loops, 0.2)
+    tri = np.asarray(m.triangles)
+    rng = np.random.default_rng(seed)
+    for scale in (0.0, 0.3, 1.5):
+        X = np.array(m.points)
+        X[m.n_boundary:] += rng.normal(scale=scale * float(np.median(m.radii)),
+                                       size=(len(X) - m.n_boundary, 2))
+        if len(tri) > 1 and scale > 1:
+            a, b, c = tri[0]
+            X[c] = X[a] + 0.5 * (X[b] - X[a]) if c >= m.n_boundary else X[c]  # flat, maybe
+        want = sum(not _ccw_exact(X[a], X[b], X[c]) for a, b, c in tri)
+        assert turned_over(X, tri) == want
 
 
 def test_delaunay_flips_stop_at_their_bound():
