@@ -146,32 +146,39 @@ def _mean_gradient(buf, deg, px, py):
 def _gradient_steps(X, i, buf, deg, step, steps, need, mean):
     """Up to ``steps`` moves of node i along the gradient of its star's mean,
     each from ``step``, halved until taken (the guard of :func:`mean_polish`).
-    Returns (the star's mean, moves taken)."""
+    Returns (the star's mean, moves taken, blocked: no slope, or a trial
+    rejected by the smallest ratio or the orientation, not by the mean)."""
     moves = 0
+    blocked = False
     for _ in range(steps):
         gx, gy = _mean_gradient(buf, deg, X[i, 0], X[i, 1])
         norm = np.hypot(gx, gy)
         if norm == 0.0:
+            blocked = True
             break
         s = step / norm
         for _ in range(BACKTRACKS):
             taken, mean = _try_move(X, i, buf, deg, X[i, 0] + s * gx, X[i, 1] + s * gy,
                                     need, mean)
-            if taken:
+            if taken > 0:
                 moves += 1
                 break
+            blocked = blocked or taken < 0
             s *= 0.5
         else:
             break
-    return mean, moves
+    return mean, moves, blocked
 
 
 @njit(cache=True, inline="always")
 def _try_move(X, i, buf, deg, px, py, need, mean):
     """Move node i to (px, py) if its star stays counter-clockwise, its worst
-    ratio at least ``need`` and its mean above ``mean``: (taken, the mean)."""
+    ratio at least ``need`` and its mean above ``mean``: (1 taken, 0 not
+    for the mean, -1 not for the worst ratio or the orientation; the mean)."""
     q, m = gathered_stats(buf, deg, px, py)
-    if q > 0.0 and q >= need and m > mean + 1e-12:
+    if not (q > 0.0 and q >= need):
+        return -1, mean
+    if m > mean + 1e-12:
         X[i, 0] = px
         X[i, 1] = py
         return 1, m
@@ -188,7 +195,7 @@ def _compass(X, i, buf, deg, step, halvings, need, mean):
         for d in range(COMPASS):
             taken, mean = _try_move(X, i, buf, deg, X[i, 0] + step * DX[d],
                                     X[i, 1] + step * DY[d], need, mean)
-            moves += taken
+            moves += taken > 0
         step *= 0.5
     return mean, moves
 
@@ -202,8 +209,8 @@ def _mean_visit(X, triangles, ptr, idx, i, buf, floor, halvings, below, steps):
         return 0
     need = max(min(worst, floor), 0.0)
     step = 0.1 * shortest_edge(buf, deg, X[i, 0], X[i, 1])
-    mean, moves = _gradient_steps(X, i, buf, deg, step, steps, need, mean)
-    if moves == 0:
+    mean, moves, blocked = _gradient_steps(X, i, buf, deg, step, steps, need, mean)
+    if moves == 0 and (blocked or steps == 0):  # not at a smooth optimum of the mean
         mean, moves = _compass(X, i, buf, deg, step, halvings, need, mean)
     return moves
 
@@ -212,8 +219,11 @@ def _mean_visit(X, triangles, ptr, idx, i, buf, floor, halvings, below, steps):
 def mean_polish(X, triangles, ptr, idx, n_boundary, sweeps, movable, floor, halvings, below,
                 steps=0):
     """Raise each star's mean radius ratio: up to ``steps`` steps along its
-    gradient, and where none is taken (the smallest ratio binds, or there
-    is no slope) a compass search, 8 directions halved ``halvings`` times.
+    gradient, and where none is taken because the smallest ratio binds (or
+    there is no slope, or ``steps`` is 0) a compass search, 8 directions
+    halved ``halvings`` times.  Where every gradient step fails for the mean
+    alone, the star sits at a smooth optimum of it, where the compass search
+    finds nothing either: it is not run.
     Both start from a tenth of the shortest incident edge; a step is taken
     if the star's mean grows and its minimum stays at least min(its value
     before, ``floor``) (exact orientation as in :func:`odt_smooth`).  Only
