@@ -5,6 +5,10 @@ import numba
 import numpy as np
 from numba import njit, prange
 
+from .memory import unsigned
+
+_ONE = np.uint64(1)
+
 
 @njit(cache=True)
 def node_adjacency(triangles, neighbors, n):
@@ -41,27 +45,27 @@ def _rings_into(ptr, idx, lo, hi, rings, out, base, room, counts):
     frontier = np.empty(n, np.int64)
     m = base
     for i in range(lo, hi):
-        mark[i] = i
+        mark[unsigned(i)] = i
         frontier[0] = i
         first = 0
         last = 1
         for _ in range(rings):
             end = last
             for f in range(first, last):
-                u = frontier[f]
-                for e in range(ptr[u], ptr[u + 1]):
+                u = unsigned(frontier[unsigned(f)])
+                for e in range(unsigned(ptr[u]), unsigned(ptr[u + _ONE])):
                     v = idx[e]
-                    if mark[v] != i:
+                    if mark[unsigned(v)] != i:
                         if m >= base + room:
                             return -1
-                        mark[v] = i
-                        frontier[end] = v
+                        mark[unsigned(v)] = i
+                        frontier[unsigned(end)] = v
                         end += 1
-                        out[m] = v
+                        out[unsigned(m)] = v
                         m += 1
             first = last
             last = end
-        counts[i] = last - 1
+        counts[unsigned(i)] = last - 1
     return m - base
 
 
