@@ -187,16 +187,16 @@ def improve_flips(X, tri, nbr, keys, ideal, max_passes, relax):
 
 @njit(cache=True, parallel=True)
 def turned_over(X, tri):
-    """How many triangles are not strictly counter-clockwise at X (exact
-    :func:`orient2d`), in parallel: 0 means nodes that moved without crossing
-    the boundary still form a valid triangulation with these triangles, from
-    which :func:`delaunay_flips` reaches the constrained Delaunay one."""
-    found = 0
+    """Per triangle: is it not strictly counter-clockwise at X (exact
+    :func:`orient2d`)?  In parallel.  None means nodes that moved without
+    crossing the boundary still form a valid triangulation with these
+    triangles, from which :func:`delaunay_flips` reaches the constrained
+    Delaunay one."""
+    turned = np.zeros(tri.shape[0], np.bool_)
     for t in prange(tri.shape[0]):
         a, b, c = tri[t, 0], tri[t, 1], tri[t, 2]
-        if orient2d(X[a, 0], X[a, 1], X[b, 0], X[b, 1], X[c, 0], X[c, 1]) <= 0.0:
-            found += 1
-    return found
+        turned[t] = orient2d(X[a, 0], X[a, 1], X[b, 0], X[b, 1], X[c, 0], X[c, 1]) <= 0.0
+    return turned
 
 
 @njit(cache=True, parallel=True)

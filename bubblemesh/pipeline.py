@@ -59,6 +59,7 @@ from ._odt import mean_polish, odt_smooth
 from ._rings import node_adjacency, ring_neighbors, vertex_triangles
 from ._seeds import frontal_seeds, inside
 from ._smoothing import compass_polish, guarded_smooth, stars, triangle_quality
+from ._untangle import untangle
 from ._verlet import VerletLists
 from .domain import Domain
 from .errors import GeometryError, MeshingError
@@ -96,6 +97,7 @@ FLIP_PASSES = 20
 MAX_SCALE = 1e12  # largest domain extent over the smallest size that bm.mesh takes
 MEAN_SWEEPS, MEAN_HALVINGS, MEAN_BELOW = 3, 4, 1.0  # 1.0: every star
 MEAN_STEPS = 3  # gradient steps per star visit before any compass search
+UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
 FRONTAL_ELEMENTS = 1000  # frontal insertion from this many elements of the cap size up
 ITERATIONS = {"centroid": 200, "frontal": 30}  # §3 force iterations by default
 
@@ -389,10 +391,20 @@ def _retriangulate_moved(X, mesh, segments):
     connectivity when the forces turned no triangle over (exact orientation;
     the boundary nodes stay, so it is still a valid triangulation of the
     domain, and the flips reach its constrained Delaunay triangulation, the
-    triangles a fresh build gives when that is unique), else a fresh CDT.
-    After the frontal §2 and its few force iterations hardly an edge flips."""
+    triangles a fresh build gives when that is unique), or, after the frontal
+    §2, turned over only a few that a local re-triangulation mends
+    (:mod:`bubblemesh._untangle`); else a fresh CDT.  After the frontal §2
+    and its few force iterations hardly an edge flips.  (Centroid insertion
+    runs on small domains or turns many triangles over in its longer force
+    run; a mended patch renumbers triangles, which the greedy valence flips
+    follow, and on small meshes that can cost some of the mean for no time
+    worth having.)"""
     tri, nbr = np.array(mesh.triangles), np.array(mesh.neighbors)
-    if turned_over(X, tri) == 0:
+    turned = turned_over(X, tri)
+    frontal = getattr(mesh.generation, "insertion", "centroid") == "frontal"
+    if frontal and 0 < turned.sum() <= UNTANGLE and untangle(X, tri, nbr, segments, turned):
+        turned = turned_over(X, tri)
+    if not turned.any():
         keys = segment_keys(segments, len(X))
         first = np.flatnonzero(non_delaunay_mask(X, tri, nbr, keys))
         if lawson_flips(X, tri, nbr, keys, 4 * len(tri), first) >= 0:

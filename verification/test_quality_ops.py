@@ -227,8 +227,8 @@ def test_the_non_delaunay_mask_is_the_exact_local_test(loops, seed):
 
 @given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
 def test_turned_over_counts_the_triangles_not_counter_clockwise(loops, seed):
-    """turned_over against exact rational orientation, with nodes moved at
-    random (some triangles turned over, some made flat)."""
+    """turned_over (a flag per triangle) against exact rational orientation,
+    with nodes moved at random (some triangles turned over, some made flat)."""
     from bubblemesh._flips import turned_over
 
     m, _ = _sized(loops, 0.2)
@@ -241,8 +241,8 @@ def test_turned_over_counts_the_triangles_not_counter_clockwise(loops, seed):
         if len(tri) > 1 and scale > 1:
             a, b, c = tri[0]
             X[c] = X[a] + 0.5 * (X[b] - X[a]) if c >= m.n_boundary else X[c]  # flat, maybe
-        want = sum(not _ccw_exact(X[a], X[b], X[c]) for a, b, c in tri)
-        assert turned_over(X, tri) == want
+        want = [not _ccw_exact(X[a], X[b], X[c]) for a, b, c in tri]
+        assert turned_over(X, tri).tolist() == want
 
 
 def test_delaunay_flips_stop_at_their_bound():
@@ -485,3 +485,43 @@ def test_the_colour_classes_are_a_proper_colouring_of_the_chosen_nodes(loops, si
     edges = np.vstack([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
     a, b = colour[edges[:, 0]], colour[edges[:, 1]]
     assert not np.any((a >= 0) & (a == b)), "an edge inside one colour class"
+
+
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1), st.floats(0.6, 3.0))
+def test_untangle_mends_triangles_turned_over_by_a_moved_node(loops, seed, reach):
+    """A node pushed across its star (still inside the domain) turns triangles
+    over; untangle either re-triangulates a patch around them, keeping every
+    node and segment, with every triangle counter-clockwise (exact oracle),
+    after which Lawson's flips give a constrained Delaunay triangulation, or
+    reports False and changes nothing."""
+    from bubblemesh._flips import lawson_flips, non_delaunay_mask, turned_over
+    from bubblemesh._untangle import untangle
+
+    m, _ = _sized(loops, 0.2)
+    if len(m.points) == m.n_boundary:
+        return
+    X = np.array(m.points)
+    tri, nbr = np.array(m.triangles), np.array(m.neighbors)
+    rng = np.random.default_rng(seed)
+    i = int(rng.integers(m.n_boundary, len(X)))
+    j = [v for v in tri[(tri == i).any(axis=1)].ravel() if v != i][int(rng.integers(0, 6)) % 3]
+    target = X[i] + reach * (X[j] - X[i])
+    loops = O.loops_from_segments(m.segments)
+    if O.domain_location(X, loops, target) <= 0:
+        return  # the forces keep nodes strictly inside
+    X[i] = target
+    turned = turned_over(X, tri)
+    if not turned.any():
+        return
+    before = tri.copy(), nbr.copy()
+    if not untangle(X, tri, nbr, np.asarray(m.segments), turned):
+        assert np.array_equal(tri, before[0]) and np.array_equal(nbr, before[1])
+        return
+    assert not turned_over(X, tri).any()
+    assert len(np.unique(tri)) == len(X)
+    O.check_valid(X, tri, nbr)
+    O.check_conforming(X, tri, m.segments, area=m.domain.area, rel=1e-9)
+    keys = segment_keys(np.asarray(m.segments), len(X))
+    first = np.flatnonzero(non_delaunay_mask(X, tri, nbr, keys))
+    lawson_flips(X, tri, nbr, keys, 4 * len(tri), first)
+    O.check_constrained_delaunay(X, tri, m.segments)
