@@ -42,7 +42,7 @@ def _rings_into(ptr, idx, lo, hi, rings, out, base, room, counts):
     counts[i] entries for node i.  Returns the entries written, -1 if no room."""
     n = ptr.shape[0] - 1
     mark = np.full(n, -1, np.int64)
-    frontier = np.empty(n, np.int64)
+    frontier = np.empty(n + 1, np.int64)  # + 1: the slot past the end takes stray writes
     m = base
     for i in range(lo, hi):
         mark[unsigned(i)] = i
@@ -54,15 +54,18 @@ def _rings_into(ptr, idx, lo, hi, rings, out, base, room, counts):
             for f in range(first, last):
                 u = unsigned(frontier[unsigned(f)])
                 for e in range(unsigned(ptr[u]), unsigned(ptr[u + _ONE])):
+                    if m >= base + room:
+                        return -1
+                    # every neighbour is written and only a new one kept (the
+                    # ends move past it): whether it is new is a coin toss
+                    # that a branch mispredicts
                     v = idx[e]
-                    if mark[unsigned(v)] != i:
-                        if m >= base + room:
-                            return -1
-                        mark[unsigned(v)] = i
-                        frontier[unsigned(end)] = v
-                        end += 1
-                        out[unsigned(m)] = v
-                        m += 1
+                    new = mark[unsigned(v)] != i
+                    mark[unsigned(v)] = i
+                    frontier[unsigned(end)] = v
+                    out[unsigned(m)] = v
+                    end += 1 if new else 0
+                    m += 1 if new else 0
             first = last
             last = end
         counts[unsigned(i)] = last - 1
