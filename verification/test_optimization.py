@@ -230,3 +230,26 @@ def test_ring_neighbors_are_graph_balls(per_node, sides):
         assert len(ring) == np.count_nonzero((hops[i] >= 1) & (hops[i] <= 3)), (
             f"node {i}: missing neighbours")
 
+
+@pytest.mark.parametrize("reach", [0.01, 0.05, 10.0])
+def test_boundary_clearance_is_the_nearest_midpoint_bound(reach):
+    """The walk-free radius of each node (a grid search for the nearest segment
+    midpoint, stopped at a horizon) against every midpoint in numpy: half of
+    (min(nearest midpoint distance, L / 2 + 2 reach) - L / 2), at least 0,
+    bit for bit; and a true lower bound on the distance to every segment."""
+    from bubblemesh._inside import boundary_clearance
+
+    mesh = bm.generate(bm.Domain.from_loops(S.square_with_hole().loops))
+    P, seg, n_b = np.asarray(mesh.points), np.asarray(mesh.segments), mesh.n_boundary
+    got = boundary_clearance(P, seg, n_b, reach)
+    ends = P[seg]
+    mid = ends.mean(axis=1)
+    longest = float(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1).max())
+    dist = np.sqrt(((P[n_b:, None, :] - mid[None, :, :]) ** 2).sum(axis=-1)).min(axis=1)
+    nearest = np.minimum(dist, 0.5 * longest + 2.0 * reach)
+    assert np.array_equal(got[:n_b], np.zeros(n_b))
+    assert np.array_equal(got[n_b:], 0.5 * np.maximum(nearest - 0.5 * longest, 0.0))
+    a, b = ends[:, 0], ends[:, 1]
+    t = np.clip((((P[n_b:, None] - a) * (b - a)).sum(-1)) / ((b - a) ** 2).sum(-1), 0, 1)
+    to_segment = np.linalg.norm(P[n_b:, None] - (a + t[..., None] * (b - a)), axis=-1).min(1)
+    assert np.all(2 * got[n_b:] <= to_segment + 1e-12)
