@@ -142,19 +142,36 @@ def gathered_beats(buf, deg, px, py, bar):
 
 
 @njit(cache=True)
-def star_unchanged(triangles, ptr, idx, i, moved_at, seen_at):
-    """True if neither node i nor a node of its star has moved since i was
-    last looked at (visit ``seen_at[i]``; ``moved_at``: the visit of each
-    node's last move, -1 for never): looking again would find what the last
-    look did, no move.  The active set of a Gauss-Seidel sweep."""
-    if seen_at[i] < 0 or moved_at[i] >= seen_at[i]:
-        return False
-    for e in range(ptr[i], ptr[i + 1]):
-        t = idx[e]
-        for k in range(3):
-            if moved_at[triangles[t, k]] > seen_at[i]:
-                return False
-    return True
+def gather_for_smoothing(X, triangles, ptr, idx, i, buf, moved_at, seen):
+    """One pass over node i's star for :func:`guarded_smooth`: its rows into
+    ``buf`` as :func:`gather_star`, the sums of its neighbours' coordinates
+    (each neighbour twice in a closed star, in the star's triangle and corner
+    order), and whether neither node i nor a node of its star has moved since
+    i was last looked at (visit ``seen``, -1 for never; ``moved_at``: the visit
+    of each node's last move, -1 for never): then looking again would find
+    what the last look did, no move (the active set of a Gauss-Seidel sweep).
+    Returns (the star's size, sum x, sum y, unchanged)."""
+    unchanged = seen >= 0 and moved_at[i] < seen
+    sx = 0.0
+    sy = 0.0
+    deg = ptr[i + 1] - ptr[i]
+    for e in range(deg):
+        t = idx[ptr[i] + e]
+        k = 0 if triangles[t, 0] == i else (1 if triangles[t, 1] == i else 2)
+        u = triangles[t, (k + 1) % 3]
+        v = triangles[t, (k + 2) % 3]
+        unchanged = unchanged and moved_at[u] <= seen and moved_at[v] <= seen
+        buf[e, 0] = X[u, 0]
+        buf[e, 1] = X[u, 1]
+        buf[e, 2] = X[v, 0]
+        buf[e, 3] = X[v, 1]
+        buf[e, 4] = math.sqrt((X[u, 0] - X[v, 0]) ** 2 + (X[u, 1] - X[v, 1]) ** 2)
+        first, second = (v, u) if k == 1 else (u, v)  # the triangle's corner order
+        sx += X[first, 0]
+        sy += X[first, 1]
+        sx += X[second, 0]
+        sy += X[second, 1]
+    return deg, sx, sy, unchanged
 
 
 @njit(cache=True, parallel=True)
@@ -184,20 +201,12 @@ def guarded_smooth(X, triangles, ptr, idx, n_boundary, sweeps, movable):
             if not movable[i] or ptr[i + 1] == ptr[i]:
                 continue
             visit += 1
-            if star_unchanged(triangles, ptr, idx, i, moved_at, seen_at):
+            deg, sx, sy, unchanged = gather_for_smoothing(X, triangles, ptr, idx, i, buf,
+                                                          moved_at, seen_at[i])
+            if unchanged:
                 continue  # the same look as last time: no move
             seen_at[i] = visit
-            deg = gather_star(X, triangles, ptr, idx, i, buf)
-            sx = 0.0
-            sy = 0.0
-            for e in range(ptr[i], ptr[i + 1]):  # each neighbour twice in a closed star
-                t = idx[e]
-                for k in range(3):
-                    v = triangles[t, k]
-                    if v != i:
-                        sx += X[v, 0]
-                        sy += X[v, 1]
-            m = 2.0 * (ptr[i + 1] - ptr[i])
+            m = 2.0 * deg
             tx, ty = sx / m, sy / m
             before = gathered_stats(buf, deg, X[i, 0], X[i, 1])[0]
             for step in STEPS:

@@ -525,3 +525,35 @@ def test_untangle_mends_triangles_turned_over_by_a_moved_node(loops, seed, reach
     first = np.flatnonzero(non_delaunay_mask(X, tri, nbr, keys))
     lawson_flips(X, tri, nbr, keys, 4 * len(tri), first)
     O.check_constrained_delaunay(X, tri, m.segments)
+
+
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_the_smoothing_gather_is_the_star_its_neighbour_sum_and_the_active_set(loops, seed):
+    """gather_for_smoothing's one pass against its three definitions: the rows
+    of gather_star; the neighbours' coordinates summed in the star's triangle
+    and corner order (plain Python); unchanged exactly when the node was seen
+    and neither it nor a node of its star moved after that."""
+    from bubblemesh._smoothing import gather_for_smoothing
+
+    m, _ = _sized(loops, 0.2)
+    X, tri = np.asarray(m.points), np.asarray(m.triangles)
+    ptr, idx = stars(tri, len(X))
+    buf, ref = star_buffer(ptr), star_buffer(ptr)
+    rng = np.random.default_rng(seed)
+    moved_at = rng.integers(-1, 6, len(X))
+    for i in rng.integers(m.n_boundary, len(X), 10) if len(X) > m.n_boundary else ():
+        for seen in (-1, 2, 4, 7):
+            deg, sx, sy, unchanged = gather_for_smoothing(X, tri, ptr, idx, int(i), buf,
+                                                          moved_at, seen)
+            assert deg == gather_star(X, tri, ptr, idx, int(i), ref)
+            assert np.array_equal(buf[:deg], ref[:deg])
+            want_x = want_y = 0.0
+            for t in idx[ptr[i]:ptr[i + 1]]:
+                for v in tri[t]:
+                    if v != i:
+                        want_x += float(X[v, 0])
+                        want_y += float(X[v, 1])
+            assert (sx, sy) == (want_x, want_y)
+            star = {int(v) for t in idx[ptr[i]:ptr[i + 1]] for v in tri[t]}
+            assert unchanged == (seen >= 0 and moved_at[i] < seen
+                                 and all(moved_at[v] <= seen for v in star))
