@@ -228,24 +228,52 @@ def mean_polish(X, triangles, ptr, idx, n_boundary, sweeps, movable, floor, halv
     if the star's mean grows and its minimum stays at least min(its value
     before, ``floor``) (exact orientation as in :func:`odt_smooth`).  Only
     stars whose mean is below ``below`` are searched.  ``sweeps`` sweeps,
-    colour by colour (:mod:`bubblemesh._colouring`); X in place.  Returns
-    the steps taken."""
+    colour by colour (:mod:`bubblemesh._colouring`); X in place.  A node
+    whose last visit moved nothing, and none of whose star has moved since,
+    is not visited again: the visit would find what the last one did (an
+    exact active set).  Returns the steps taken."""
     order, colour_ptr = colour_classes(triangles, ptr, idx, n_boundary, movable)
     most = star_buffer(ptr).shape[0]
+    moved_at = np.full(X.shape[0], -1, np.int64)  # the colour class of each node's last move
+    seen_at = np.full(X.shape[0], -1, np.int64)  # and of its last visit
+    stamp = 0
     taken = 0
     for _ in range(sweeps):
         moved = 0
         for c in range(colour_ptr.shape[0] - 1):
+            stamp += 1
             lo, hi = colour_ptr[c], colour_ptr[c + 1]
             blocks = (hi - lo + BLOCK - 1) // BLOCK
             moves = np.zeros(blocks, np.int64)
             for b in prange(blocks):
                 buf = np.empty((most, 5))
                 for j in range(lo + b * BLOCK, min(hi, lo + (b + 1) * BLOCK)):
-                    moves[b] += _mean_visit(X, triangles, ptr, idx, order[j], buf, floor,
-                                            halvings, below, steps)
+                    i = order[j]
+                    if _settled(triangles, ptr, idx, i, moved_at, seen_at[i]):
+                        continue
+                    seen_at[i] = stamp
+                    taken_here = _mean_visit(X, triangles, ptr, idx, i, buf, floor, halvings,
+                                             below, steps)
+                    if taken_here:
+                        moved_at[i] = stamp
+                    moves[b] += taken_here
             moved += moves.sum()
         taken += moved
         if moved == 0:
             break
     return taken
+
+
+@njit(cache=True)
+def _settled(triangles, ptr, idx, i, moved_at, seen):
+    """Has node i been visited (at class ``seen``) and has nothing of its
+    star, i included, moved at or since that visit?  Nodes of one colour share
+    no edge, so the neighbours' stamps do not change while i's class runs."""
+    if seen < 0:
+        return False
+    for e in range(ptr[i], ptr[i + 1]):
+        t = idx[e]
+        for k in range(3):
+            if moved_at[triangles[t, k]] >= seen:
+                return False
+    return True

@@ -557,3 +557,31 @@ def test_the_smoothing_gather_is_the_star_its_neighbour_sum_and_the_active_set(l
             star = {int(v) for t in idx[ptr[i]:ptr[i + 1]] for v in tri[t]}
             assert unchanged == (seen >= 0 and moved_at[i] < seen
                                  and all(moved_at[v] <= seen for v in star))
+
+
+@S.budget(20)
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_the_mean_polish_active_set_changes_no_bit(loops, seed):
+    """mean_polish skips nodes whose last visit moved nothing and whose star
+    has not moved since: the same positions, bit for bit, as visiting every
+    node of every colour class in every sweep."""
+    from bubblemesh._colouring import colour_classes
+    from bubblemesh._odt import _mean_visit
+
+    m, _ = _sized(loops, 0.2)
+    X, tri = np.array(m.points), np.asarray(m.triangles)
+    rng = np.random.default_rng(seed)
+    X[m.n_boundary:] += rng.normal(scale=0.05 * float(np.median(m.radii)),
+                                   size=(len(X) - m.n_boundary, 2))
+    ptr, idx = stars(tri, len(X))
+    movable = np.ones(len(X), bool)
+    movable[: m.n_boundary] = False
+    Y = X.copy()
+    mean_polish(X, tri, ptr, idx, m.n_boundary, 3, movable, 0.5, 4, 1.0, 3)
+    order, colour_ptr = colour_classes(tri, ptr, idx, m.n_boundary, movable)
+    buf = star_buffer(ptr)
+    for _ in range(3):
+        moved = sum(_mean_visit(Y, tri, ptr, idx, i, buf, 0.5, 4, 1.0, 3) for i in order)
+        if moved == 0:
+            break
+    assert np.array_equal(X, Y)
