@@ -585,3 +585,27 @@ def test_the_mean_polish_active_set_changes_no_bit(loops, seed):
         if moved == 0:
             break
     assert np.array_equal(X, Y)
+
+
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_a_star_clearly_fine_by_its_triangles_is_fine_by_the_gathered_rating(loops, seed):
+    """The compass search's pass-over test: where every triangle's ratio (in
+    its own corner order) is at least poor + MARGIN and no node has moved,
+    the star's smallest ratio rated from the node's corner is at least poor;
+    bars at the mesh's own ratios, where the two roundings meet."""
+    from bubblemesh._smoothing import MARGIN, _clearly_fine, triangle_quality
+
+    m, _ = _sized(loops, 0.2)
+    X, tri = np.array(m.points), np.asarray(m.triangles)
+    rng = np.random.default_rng(seed)
+    X[m.n_boundary:] += rng.normal(scale=0.1 * float(np.median(m.radii)),
+                                   size=(len(X) - m.n_boundary, 2))
+    ptr, idx = stars(tri, len(X))
+    buf = star_buffer(ptr)
+    q = triangle_quality(X, tri)
+    touched = np.zeros(len(X), bool)
+    for poor in (0.85, *(q[rng.integers(0, len(q), 3)] - MARGIN)):
+        for i in range(m.n_boundary, len(X)):
+            if _clearly_fine(tri, ptr, idx, i, q, touched, poor):
+                deg = gather_star(X, tri, ptr, idx, i, buf)
+                assert gathered_stats(buf, deg, X[i, 0], X[i, 1])[0] >= poor
