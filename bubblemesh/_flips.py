@@ -22,7 +22,7 @@ visited in triangle order, passes repeat until none flips (at most
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ._smoothing import rho
 from .predicates import incircle, orient2d
@@ -30,18 +30,32 @@ from .predicates import incircle, orient2d
 GAIN = 1e-9  # a quality flip must raise the pair's worst ratio by more than this
 
 
-@njit(cache=True)
-def ideal_counts(X, triangles, n):
-    """Ideal triangle count at every node: its angle sum / (pi / 3), rounded, >= 1."""
-    total = np.zeros(n)
-    for t in range(triangles.shape[0]):
+@njit(cache=True, parallel=True)
+def _corner_angles(X, triangles):
+    """The angle of every triangle at each of its corners (the triangles in
+    parallel: atan2 is the cost)."""
+    angles = np.empty((triangles.shape[0], 3))
+    for t in prange(triangles.shape[0]):
         for k in range(3):
             i = triangles[t, k]
             j = triangles[t, (k + 1) % 3]
             m = triangles[t, (k + 2) % 3]
             ux, uy = X[j, 0] - X[i, 0], X[j, 1] - X[i, 1]
             vx, vy = X[m, 0] - X[i, 0], X[m, 1] - X[i, 1]
-            total[i] += math.atan2(abs(ux * vy - uy * vx), ux * vx + uy * vy)
+            angles[t, k] = math.atan2(abs(ux * vy - uy * vx), ux * vx + uy * vy)
+    return angles
+
+
+@njit(cache=True)
+def ideal_counts(X, triangles, n):
+    """Ideal triangle count at every node: its angle sum / (pi / 3), rounded,
+    >= 1.  The sums run in triangle order (rounding decides ties of the
+    count)."""
+    angles = _corner_angles(X, triangles)
+    total = np.zeros(n)
+    for t in range(triangles.shape[0]):
+        for k in range(3):
+            total[triangles[t, k]] += angles[t, k]
     ideal = np.empty(n, np.int64)
     for i in range(n):
         ideal[i] = max(1, int(round(total[i] / (math.pi / 3))))
@@ -171,22 +185,75 @@ def improve_flips(X, tri, nbr, keys, ideal, max_passes, relax):
     return flips
 
 
+@njit(cache=True, parallel=True)
+def turned_over(X, tri):
+    """Per triangle: is it not strictly counter-clockwise at X (exact
+    :func:`orient2d`)?  In parallel.  None means nodes that moved without
+    crossing the boundary still form a valid triangulation with these
+    triangles, from which :func:`delaunay_flips` reaches the constrained
+    Delaunay one."""
+    turned = np.zeros(tri.shape[0], np.bool_)
+    for t in prange(tri.shape[0]):
+        a, b, c = tri[t, 0], tri[t, 1], tri[t, 2]
+        turned[t] = orient2d(X[a, 0], X[a, 1], X[b, 0], X[b, 1], X[c, 0], X[c, 1]) <= 0.0
+    return turned
+
+
+@njit(cache=True, parallel=True)
+def non_delaunay_mask(X, tri, nbr, keys):
+    """Per half-edge (t, k) (row-major, 3 t + k): is it an interior
+    non-segment edge that :func:`delaunay_flips` would find non-Delaunay in
+    its first look?  Each edge is marked once, from its lower-numbered
+    triangle (the exact :func:`incircle` of (c, a, b, d) and of (d, b, a, c)
+    is the same determinant); the triangles run in parallel: after small
+    moves most triangulations are still Delaunay, and this settles it without
+    the serial queue."""
+    n = X.shape[0]
+    mask = np.zeros((tri.shape[0], 3), np.bool_)
+    for t in prange(tri.shape[0]):
+        for k in range(3):
+            u = nbr[t, k]
+            if u > t:
+                c = tri[t, k]
+                a = tri[t, (k + 1) % 3]
+                b = tri[t, (k + 2) % 3]
+                _, d = across(tri, t, k, u)
+                mask[t, k] = incircle(X[c, 0], X[c, 1], X[a, 0], X[a, 1], X[b, 0], X[b, 1],
+                                      X[d, 0], X[d, 1]) > 0.0 and not _is_segment(keys, n, a, b)
+    return mask
+
+
 @njit(cache=True)
 def delaunay_flips(X, tri, nbr, keys, max_flips):
     """Lawson's flips: while an interior non-segment edge ab of t = (c, a, b)
     and u = (b, a, d) has d strictly inside the circle through c, a, b (exact
     :func:`incircle`), flip it to cd; ``tri`` and ``nbr`` in place.  From a
     valid triangulation this ends at the constrained Delaunay triangulation
-    (any one of them when four nodes are cocircular).  Each edge waits in a
-    ring queue at most once at a time.  Returns the number of flips, -1 if
-    ``max_flips`` was reached first."""
+    (any one of them when four nodes are cocircular).  Every half-edge is
+    looked at, in order (:func:`lawson_flips`).  Returns the number of flips,
+    -1 if ``max_flips`` was reached first."""
+    return lawson_flips(X, tri, nbr, keys, max_flips, np.arange(3 * tri.shape[0]))
+
+
+@njit(cache=True)
+def lawson_flips(X, tri, nbr, keys, max_flips, first):
+    """:func:`delaunay_flips` looking first at the half-edges ``first`` (3 t +
+    k, in that order), then at the outer edges of each flip: enough when every
+    edge not in ``first`` is a segment or locally Delaunay
+    (:func:`non_delaunay_mask`).  Each edge waits in a ring queue at most once
+    at a time."""
     n = X.shape[0]
     m_tri = tri.shape[0]
     size = 3 * m_tri
-    queued = np.ones(size, np.bool_)
-    queue = np.arange(size)
+    queued = np.zeros(size, np.bool_)
+    queue = np.empty(size, np.int64)
+    waiting = 0
+    for f in first:
+        if not queued[f]:
+            queued[f] = True
+            queue[waiting] = f
+            waiting += 1
     head = 0
-    waiting = size
     flips = 0
     while waiting > 0:
         e = queue[head]

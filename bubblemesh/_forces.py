@@ -35,6 +35,51 @@ def _inverse_separation(X, i, j):
     return dx, dy, 1.0 / length if length > 0.0 else 0.0
 
 
+@njit(cache=True, inline="always")
+def _push(X, R, i, j, w, fx, fy):
+    """Adds eq. 8's term of node j, ((r_i + r_j) / l - 1)(x_i - x_j) when
+    the bubbles overlap (w = 1 / l, 0 for coincident nodes), to (fx, fy)."""
+    dx, dy = _difference(X, i, j)
+    scale = (R[i] + R[j]) * w - 1.0  # 0 for coincident nodes (w = 0)
+    # a select, not a branch: many listed pairs do not overlap, and a branch
+    # on it is mispredicted
+    scale = scale if scale > 0.0 else 0.0
+    return fx + scale * dx, fy + scale * dy
+
+
+@njit(cache=True, inline="always")
+def _stored_force(X, R, i, e, end, nearby, inverse):
+    """Eq. 8's sum over list entries e..end-1 with the stored 1 / l."""
+    fx = 0.0
+    fy = 0.0
+    while e < end:
+        fx, fy = _push(X, R, i, unsigned(nearby[e]), inverse[e], fx, fy)
+        e += _ONE
+    return fx, fy
+
+
+@njit(cache=True, inline="always")
+def _fresh_force(X, R, i, e, end, nearby):
+    """Eq. 8's sum over list entries e..end-1, in list order, computing 1 / l:
+    two entries at a time with one packed square root and one packed
+    division (``simd.py``; the same bits as one at a time)."""
+    fx = 0.0
+    fy = 0.0
+    while e + _ONE < end:
+        j = unsigned(nearby[e])
+        k = unsigned(nearby[e + _ONE])
+        dx, dy = _difference(X, i, j)
+        ex, ey = _difference(X, i, k)
+        l_j, l_k, w_j, w_k = roots_and_reciprocals(dx * dx + dy * dy, ex * ex + ey * ey)
+        fx, fy = _push(X, R, i, j, w_j if l_j > 0.0 else 0.0, fx, fy)
+        fx, fy = _push(X, R, i, k, w_k if l_k > 0.0 else 0.0, fx, fy)
+        e += _TWO
+    if e < end:
+        _, _, w = _inverse_separation(X, i, unsigned(nearby[e]))
+        fx, fy = _push(X, R, i, unsigned(nearby[e]), w, fx, fy)
+    return fx, fy
+
+
 @njit(cache=True, parallel=True)
 def move(X, R, Xn, home, start, count, nearby, inverse, reuse, n_boundary, alpha, P0, tri0,
           nbr0, clearance, X0, R0, skin, V, beta):
@@ -50,7 +95,8 @@ def move(X, R, Xn, home, start, count, nearby, inverse, reuse, n_boundary, alpha
     The previous eq. 9 pass already evaluated 1 / l at these very positions
     and stored it per list entry (``inverse``); when ``reuse`` (the lists
     have not been rebuilt since), the square root and division are skipped,
-    with the same bits as computing them again.
+    with the same bits as computing them again; otherwise they go two list
+    entries at a time, packed (``simd.py``), the sums still in list order.
 
     ``home[i]`` (a §2 triangle holding node i) is node i's own, so it is
     updated in place.  Returns how many nodes outgrew the lists built at
@@ -61,22 +107,12 @@ def move(X, R, Xn, home, start, count, nearby, inverse, reuse, n_boundary, alpha
     largest = 0.0
     for node in prange(n_boundary, X.shape[0]):
         i = unsigned(node)
-        fx = 0.0
-        fy = 0.0
         first = unsigned(start[i])
-        for e in range(first, first + unsigned(count[i])):
-            j = unsigned(nearby[e])
-            if reuse:
-                dx, dy = _difference(X, i, j)
-                w = inverse[e]
-            else:
-                dx, dy, w = _inverse_separation(X, i, j)
-            scale = (R[i] + R[j]) * w - 1.0  # 0 for coincident nodes (w = 0)
-            # a select, not a branch: many listed pairs do not overlap, and a
-            # branch on it is mispredicted
-            scale = scale if scale > 0.0 else 0.0
-            fx += scale * dx
-            fy += scale * dy
+        end = first + unsigned(count[i])
+        if reuse:
+            fx, fy = _stored_force(X, R, i, first, end, nearby, inverse)
+        else:
+            fx, fy = _fresh_force(X, R, i, first, end, nearby)
         Xn[i, 0] = X[i, 0]
         Xn[i, 1] = X[i, 1]
         step = alpha

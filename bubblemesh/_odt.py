@@ -18,6 +18,7 @@ from numba import njit, prange
 
 from ._colouring import BLOCK, colour_classes
 from ._smoothing import gather_star, gathered_stats, shortest_edge, star_buffer
+from .simd import quotients
 
 STEPS = (1.0, 0.5, 0.25)
 COMPASS = 8
@@ -128,8 +129,16 @@ def _mean_gradient(buf, deg, px, py):
             continue
         s = a + b + c
         r = 4.0 * area2 * area2 / (s * a * b * c)
-        gx += r * (2.0 * (uy - vy) / area2 - (bx / b + cx / c) / s - bx / (b * b) - cx / (c * c))
-        gy += r * (2.0 * (vx - ux) / area2 - (by / b + cy / c) / s - by / (b * b) - cy / (c * c))
+        # both coordinates' divisions by the same length as one packed
+        # division each (simd.py): the divider bounds this loop
+        ax, ay = quotients(2.0 * (uy - vy), 2.0 * (vx - ux), area2, area2)
+        bx_b, by_b = quotients(bx, by, b, b)
+        cx_c, cy_c = quotients(cx, cy, c, c)
+        sx, sy = quotients(bx_b + cx_c, by_b + cy_c, s, s)
+        b2x, b2y = quotients(bx, by, b * b, b * b)
+        c2x, c2y = quotients(cx, cy, c * c, c * c)
+        gx += r * (ax - sx - b2x - c2x)
+        gy += r * (ay - sy - b2y - c2y)
     return gx, gy
 
 
@@ -137,32 +146,39 @@ def _mean_gradient(buf, deg, px, py):
 def _gradient_steps(X, i, buf, deg, step, steps, need, mean):
     """Up to ``steps`` moves of node i along the gradient of its star's mean,
     each from ``step``, halved until taken (the guard of :func:`mean_polish`).
-    Returns (the star's mean, moves taken)."""
+    Returns (the star's mean, moves taken, blocked: no slope, or a trial
+    rejected by the smallest ratio or the orientation, not by the mean)."""
     moves = 0
+    blocked = False
     for _ in range(steps):
         gx, gy = _mean_gradient(buf, deg, X[i, 0], X[i, 1])
         norm = np.hypot(gx, gy)
         if norm == 0.0:
+            blocked = True
             break
         s = step / norm
         for _ in range(BACKTRACKS):
             taken, mean = _try_move(X, i, buf, deg, X[i, 0] + s * gx, X[i, 1] + s * gy,
                                     need, mean)
-            if taken:
+            if taken > 0:
                 moves += 1
                 break
+            blocked = blocked or taken < 0
             s *= 0.5
         else:
             break
-    return mean, moves
+    return mean, moves, blocked
 
 
 @njit(cache=True, inline="always")
 def _try_move(X, i, buf, deg, px, py, need, mean):
     """Move node i to (px, py) if its star stays counter-clockwise, its worst
-    ratio at least ``need`` and its mean above ``mean``: (taken, the mean)."""
+    ratio at least ``need`` and its mean above ``mean``: (1 taken, 0 not
+    for the mean, -1 not for the worst ratio or the orientation; the mean)."""
     q, m = gathered_stats(buf, deg, px, py)
-    if q > 0.0 and q >= need and m > mean + 1e-12:
+    if not (q > 0.0 and q >= need):
+        return -1, mean
+    if m > mean + 1e-12:
         X[i, 0] = px
         X[i, 1] = py
         return 1, m
@@ -179,7 +195,7 @@ def _compass(X, i, buf, deg, step, halvings, need, mean):
         for d in range(COMPASS):
             taken, mean = _try_move(X, i, buf, deg, X[i, 0] + step * DX[d],
                                     X[i, 1] + step * DY[d], need, mean)
-            moves += taken
+            moves += taken > 0
         step *= 0.5
     return mean, moves
 
@@ -192,9 +208,9 @@ def _mean_visit(X, triangles, ptr, idx, i, buf, floor, halvings, below, steps):
     if mean >= below:
         return 0
     need = max(min(worst, floor), 0.0)
-    step = 0.1 * shortest_edge(X, triangles, ptr, idx, i)
-    mean, moves = _gradient_steps(X, i, buf, deg, step, steps, need, mean)
-    if moves == 0:
+    step = 0.1 * shortest_edge(buf, deg, X[i, 0], X[i, 1])
+    mean, moves, blocked = _gradient_steps(X, i, buf, deg, step, steps, need, mean)
+    if moves == 0 and (blocked or steps == 0):  # not at a smooth optimum of the mean
         mean, moves = _compass(X, i, buf, deg, step, halvings, need, mean)
     return moves
 
@@ -203,30 +219,61 @@ def _mean_visit(X, triangles, ptr, idx, i, buf, floor, halvings, below, steps):
 def mean_polish(X, triangles, ptr, idx, n_boundary, sweeps, movable, floor, halvings, below,
                 steps=0):
     """Raise each star's mean radius ratio: up to ``steps`` steps along its
-    gradient, and where none is taken (the smallest ratio binds, or there
-    is no slope) a compass search, 8 directions halved ``halvings`` times.
+    gradient, and where none is taken because the smallest ratio binds (or
+    there is no slope, or ``steps`` is 0) a compass search, 8 directions
+    halved ``halvings`` times.  Where every gradient step fails for the mean
+    alone, the star sits at a smooth optimum of it, where the compass search
+    finds nothing either: it is not run.
     Both start from a tenth of the shortest incident edge; a step is taken
     if the star's mean grows and its minimum stays at least min(its value
     before, ``floor``) (exact orientation as in :func:`odt_smooth`).  Only
     stars whose mean is below ``below`` are searched.  ``sweeps`` sweeps,
-    colour by colour (:mod:`bubblemesh._colouring`); X in place.  Returns
-    the steps taken."""
+    colour by colour (:mod:`bubblemesh._colouring`); X in place.  A node
+    whose last visit moved nothing, and none of whose star has moved since,
+    is not visited again: the visit would find what the last one did (an
+    exact active set).  Returns the steps taken."""
     order, colour_ptr = colour_classes(triangles, ptr, idx, n_boundary, movable)
     most = star_buffer(ptr).shape[0]
+    moved_at = np.full(X.shape[0], -1, np.int64)  # the colour class of each node's last move
+    seen_at = np.full(X.shape[0], -1, np.int64)  # and of its last visit
+    stamp = 0
     taken = 0
     for _ in range(sweeps):
         moved = 0
         for c in range(colour_ptr.shape[0] - 1):
+            stamp += 1
             lo, hi = colour_ptr[c], colour_ptr[c + 1]
             blocks = (hi - lo + BLOCK - 1) // BLOCK
             moves = np.zeros(blocks, np.int64)
             for b in prange(blocks):
                 buf = np.empty((most, 5))
                 for j in range(lo + b * BLOCK, min(hi, lo + (b + 1) * BLOCK)):
-                    moves[b] += _mean_visit(X, triangles, ptr, idx, order[j], buf, floor,
-                                            halvings, below, steps)
+                    i = order[j]
+                    if _settled(triangles, ptr, idx, i, moved_at, seen_at[i]):
+                        continue
+                    seen_at[i] = stamp
+                    taken_here = _mean_visit(X, triangles, ptr, idx, i, buf, floor, halvings,
+                                             below, steps)
+                    if taken_here:
+                        moved_at[i] = stamp
+                    moves[b] += taken_here
             moved += moves.sum()
         taken += moved
         if moved == 0:
             break
     return taken
+
+
+@njit(cache=True)
+def _settled(triangles, ptr, idx, i, moved_at, seen):
+    """Has node i been visited (at class ``seen``) and has nothing of its
+    star, i included, moved at or since that visit?  Nodes of one colour share
+    no edge, so the neighbours' stamps do not change while i's class runs."""
+    if seen < 0:
+        return False
+    for e in range(ptr[i], ptr[i + 1]):
+        t = idx[e]
+        for k in range(3):
+            if moved_at[triangles[t, k]] >= seen:
+                return False
+    return True

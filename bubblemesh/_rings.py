@@ -5,6 +5,10 @@ import numba
 import numpy as np
 from numba import njit, prange
 
+from .memory import unsigned
+
+_ONE = np.uint64(1)
+
 
 @njit(cache=True)
 def node_adjacency(triangles, neighbors, n):
@@ -38,30 +42,33 @@ def _rings_into(ptr, idx, lo, hi, rings, out, base, room, counts):
     counts[i] entries for node i.  Returns the entries written, -1 if no room."""
     n = ptr.shape[0] - 1
     mark = np.full(n, -1, np.int64)
-    frontier = np.empty(n, np.int64)
+    frontier = np.empty(n + 1, np.int64)  # + 1: the slot past the end takes stray writes
     m = base
     for i in range(lo, hi):
-        mark[i] = i
+        mark[unsigned(i)] = i
         frontier[0] = i
         first = 0
         last = 1
         for _ in range(rings):
             end = last
             for f in range(first, last):
-                u = frontier[f]
-                for e in range(ptr[u], ptr[u + 1]):
+                u = unsigned(frontier[unsigned(f)])
+                for e in range(unsigned(ptr[u]), unsigned(ptr[u + _ONE])):
+                    if m >= base + room:
+                        return -1
+                    # every neighbour is written and only a new one kept (the
+                    # ends move past it): whether it is new is a coin toss
+                    # that a branch mispredicts
                     v = idx[e]
-                    if mark[v] != i:
-                        if m >= base + room:
-                            return -1
-                        mark[v] = i
-                        frontier[end] = v
-                        end += 1
-                        out[m] = v
-                        m += 1
+                    new = mark[unsigned(v)] != i
+                    mark[unsigned(v)] = i
+                    frontier[unsigned(end)] = v
+                    out[unsigned(m)] = v
+                    end += 1 if new else 0
+                    m += 1 if new else 0
             first = last
             last = end
-        counts[i] = last - 1
+        counts[unsigned(i)] = last - 1
     return m - base
 
 

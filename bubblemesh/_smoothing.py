@@ -18,13 +18,14 @@ worst stars toward a local optimum of their smallest ratio.
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from .predicates import orient2d
 
 STEPS = (1.0, 0.5, 0.25)
 COMPASS = 8  # directions of the compass search
 COMPASS_HALVINGS = 6
+MARGIN = 1e-9  # far above the rounding of eq. 10 from another corner of the triangle
 
 
 @njit(cache=True, inline="always")
@@ -126,26 +127,60 @@ def gathered_stats(buf, deg, px, py):
 
 
 @njit(cache=True)
-def star_unchanged(triangles, ptr, idx, i, moved_at, seen_at):
-    """True if neither node i nor a node of its star has moved since i was
-    last looked at (visit ``seen_at[i]``; ``moved_at``: the visit of each
-    node's last move, -1 for never): looking again would find what the last
-    look did, no move.  The active set of a Gauss-Seidel sweep."""
-    if seen_at[i] < 0 or moved_at[i] >= seen_at[i]:
-        return False
-    for e in range(ptr[i], ptr[i + 1]):
-        t = idx[e]
-        for k in range(3):
-            if moved_at[triangles[t, k]] > seen_at[i]:
-                return False
+def gathered_beats(buf, deg, px, py, bar):
+    """``gathered_stats(buf, deg, px, py)[0] > bar``, stopping at the first
+    triangle that decides it: one not counter-clockwise or with a radius
+    ratio not above ``bar`` (most guarded moves fail, often early)."""
+    if bar >= 1.0:
+        return False  # the smallest ratio starts at 1
+    for e in range(deg):
+        ux, uy, vx, vy = buf[e, 0], buf[e, 1], buf[e, 2], buf[e, 3]
+        if orient2d(px, py, ux, uy, vx, vy) <= 0.0:
+            return False
+        if rho_opposite(px, py, ux, uy, vx, vy, buf[e, 4]) <= bar:
+            return False
     return True
 
 
 @njit(cache=True)
+def gather_for_smoothing(X, triangles, ptr, idx, i, buf, moved_at, seen):
+    """One pass over node i's star for :func:`guarded_smooth`: its rows into
+    ``buf`` as :func:`gather_star`, the sums of its neighbours' coordinates
+    (each neighbour twice in a closed star, in the star's triangle and corner
+    order), and whether neither node i nor a node of its star has moved since
+    i was last looked at (visit ``seen``, -1 for never; ``moved_at``: the visit
+    of each node's last move, -1 for never): then looking again would find
+    what the last look did, no move (the active set of a Gauss-Seidel sweep).
+    Returns (the star's size, sum x, sum y, unchanged)."""
+    unchanged = seen >= 0 and moved_at[i] < seen
+    sx = 0.0
+    sy = 0.0
+    deg = ptr[i + 1] - ptr[i]
+    for e in range(deg):
+        t = idx[ptr[i] + e]
+        k = 0 if triangles[t, 0] == i else (1 if triangles[t, 1] == i else 2)
+        u = triangles[t, (k + 1) % 3]
+        v = triangles[t, (k + 2) % 3]
+        unchanged = unchanged and moved_at[u] <= seen and moved_at[v] <= seen
+        buf[e, 0] = X[u, 0]
+        buf[e, 1] = X[u, 1]
+        buf[e, 2] = X[v, 0]
+        buf[e, 3] = X[v, 1]
+        buf[e, 4] = math.sqrt((X[u, 0] - X[v, 0]) ** 2 + (X[u, 1] - X[v, 1]) ** 2)
+        first, second = (v, u) if k == 1 else (u, v)  # the triangle's corner order
+        sx += X[first, 0]
+        sy += X[first, 1]
+        sx += X[second, 0]
+        sy += X[second, 1]
+    return deg, sx, sy, unchanged
+
+
+@njit(cache=True, parallel=True)
 def triangle_quality(X, triangles):
-    """Eq. 10 per triangle (0 for one that is not counter-clockwise)."""
+    """Eq. 10 per triangle (0 for one that is not counter-clockwise); the
+    triangles in parallel."""
     q = np.empty(triangles.shape[0])
-    for t in range(triangles.shape[0]):
+    for t in prange(triangles.shape[0]):
         a, b, c = triangles[t, 0], triangles[t, 1], triangles[t, 2]
         q[t] = rho(X[a, 0], X[a, 1], X[b, 0], X[b, 1], X[c, 0], X[c, 1])
     return q
@@ -167,26 +202,18 @@ def guarded_smooth(X, triangles, ptr, idx, n_boundary, sweeps, movable):
             if not movable[i] or ptr[i + 1] == ptr[i]:
                 continue
             visit += 1
-            if star_unchanged(triangles, ptr, idx, i, moved_at, seen_at):
+            deg, sx, sy, unchanged = gather_for_smoothing(X, triangles, ptr, idx, i, buf,
+                                                          moved_at, seen_at[i])
+            if unchanged:
                 continue  # the same look as last time: no move
             seen_at[i] = visit
-            deg = gather_star(X, triangles, ptr, idx, i, buf)
-            sx = 0.0
-            sy = 0.0
-            for e in range(ptr[i], ptr[i + 1]):  # each neighbour twice in a closed star
-                t = idx[e]
-                for k in range(3):
-                    v = triangles[t, k]
-                    if v != i:
-                        sx += X[v, 0]
-                        sy += X[v, 1]
-            m = 2.0 * (ptr[i + 1] - ptr[i])
+            m = 2.0 * deg
             tx, ty = sx / m, sy / m
             before = gathered_stats(buf, deg, X[i, 0], X[i, 1])[0]
             for step in STEPS:
                 px = X[i, 0] + step * (tx - X[i, 0])
                 py = X[i, 1] + step * (ty - X[i, 1])
-                if gathered_stats(buf, deg, px, py)[0] > before:
+                if gathered_beats(buf, deg, px, py, before):
                     X[i, 0] = px
                     X[i, 1] = py
                     moved += 1
@@ -199,32 +226,62 @@ def guarded_smooth(X, triangles, ptr, idx, n_boundary, sweeps, movable):
 
 
 @njit(cache=True)
-def shortest_edge(X, triangles, ptr, idx, i):
-    """The shortest edge at node i of its star (the step scale of a search)."""
+def shortest_edge(buf, deg, px, py):
+    """The shortest edge at node i, at (px, py), of its star gathered by
+    :func:`gather_star` (the far corners are its neighbours): the step scale
+    of a search, by ``math.hypot``.  hypot is slow, so only the edges whose
+    squared length is within a relative 1e-9 of the smallest get it: hypot
+    is within an ulp or two of the true length, so no other edge is shorter."""
+    least = np.inf
+    for e in range(deg):
+        for c in (0, 2):
+            least = min(least, (buf[e, c] - px) ** 2 + (buf[e, c + 1] - py) ** 2)
     shortest = np.inf
-    for e in range(ptr[i], ptr[i + 1]):
-        for k in range(3):
-            v = triangles[idx[e], k]
-            if v != i:
-                shortest = min(shortest, math.hypot(X[v, 0] - X[i, 0], X[v, 1] - X[i, 1]))
+    for e in range(deg):
+        for c in (0, 2):
+            dx, dy = buf[e, c] - px, buf[e, c + 1] - py
+            if dx ** 2 + dy ** 2 <= least * (1.0 + 1e-9):
+                shortest = min(shortest, math.hypot(dx, dy))
     return shortest
+
+
+@njit(cache=True)
+def _clearly_fine(triangles, ptr, idx, i, q, touched, poor):
+    """Is node i's star at least ``poor`` by its triangles' ratios ``q`` with
+    room to spare (:data:`MARGIN`: a triangle's ratio computed from another
+    corner rounds differently), and has none of its nodes moved since ``q``
+    was computed?  Then the compass search would pass the star over."""
+    for e in range(ptr[i], ptr[i + 1]):
+        t = idx[e]
+        if q[t] < poor + MARGIN:
+            return False
+        for k in range(3):
+            if touched[triangles[t, k]]:
+                return False
+    return True
 
 
 @njit(cache=True)
 def compass_polish(X, triangles, ptr, idx, n_boundary, poor, movable):
     """Compass search on the interior nodes with ``movable`` set whose star's
-    smallest ratio is below ``poor`` (module docstring); X in place.  Returns
+    smallest ratio is below ``poor`` (module docstring); X in place.  Most
+    stars are well above it: their triangles' ratios, computed once for the
+    pass, pass them over while none of their nodes has moved in it.  Returns
     the number of steps taken."""
     taken = 0
     buf = star_buffer(ptr)
+    q = triangle_quality(X, triangles)
+    touched = np.zeros(X.shape[0], np.bool_)
     for i in range(n_boundary, X.shape[0]):
         if not movable[i] or ptr[i + 1] == ptr[i]:
+            continue
+        if _clearly_fine(triangles, ptr, idx, i, q, touched, poor):
             continue
         deg = gather_star(X, triangles, ptr, idx, i, buf)
         best = gathered_stats(buf, deg, X[i, 0], X[i, 1])[0]
         if best >= poor:
             continue
-        step = 0.1 * shortest_edge(X, triangles, ptr, idx, i)
+        step = 0.1 * shortest_edge(buf, deg, X[i, 0], X[i, 1])
         for _ in range(COMPASS_HALVINGS):
             improved = True
             while improved:
@@ -233,13 +290,13 @@ def compass_polish(X, triangles, ptr, idx, n_boundary, poor, movable):
                     a = 2.0 * math.pi * d / COMPASS
                     px = X[i, 0] + step * math.cos(a)
                     py = X[i, 1] + step * math.sin(a)
-                    q = gathered_stats(buf, deg, px, py)[0]
-                    if q > best:
+                    if gathered_beats(buf, deg, px, py, best):
                         X[i, 0] = px
                         X[i, 1] = py
-                        best = q
+                        best = gathered_stats(buf, deg, px, py)[0]
                         improved = True
                         taken += 1
+                        touched[i] = True
                         break
                 if taken > 64 * (X.shape[0] - n_boundary):  # bounded whatever happens
                     return taken

@@ -41,8 +41,17 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ._area_bound import FILL, bound_areas
+from ._coincident import shared_positions
 from ._corners import split_corners
-from ._flips import delaunay_flips, ideal_counts, improve_flips, segment_keys
+from ._flips import (
+    delaunay_flips,
+    ideal_counts,
+    improve_flips,
+    lawson_flips,
+    non_delaunay_mask,
+    segment_keys,
+    turned_over,
+)
 from ._forces import move
 from ._inside import boundary_clearance
 from ._lattice import lattice_points
@@ -51,6 +60,7 @@ from ._odt import mean_polish, odt_smooth
 from ._rings import node_adjacency, ring_neighbors, vertex_triangles
 from ._seeds import frontal_seeds, inside
 from ._smoothing import compass_polish, guarded_smooth, stars, triangle_quality
+from ._untangle import untangle
 from ._verlet import VerletLists
 from .domain import Domain
 from .errors import GeometryError, MeshingError
@@ -88,6 +98,7 @@ FLIP_PASSES = 20
 MAX_SCALE = 1e12  # largest domain extent over the smallest size that bm.mesh takes
 MEAN_SWEEPS, MEAN_HALVINGS, MEAN_BELOW = 3, 4, 1.0  # 1.0: every star
 MEAN_STEPS = 3  # gradient steps per star visit before any compass search
+UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
 FRONTAL_ELEMENTS = 1000  # frontal insertion from this many elements of the cap size up
 ITERATIONS = {"centroid": 200, "frontal": 30}  # §3 force iterations by default
 LATTICE_MARGIN = 4.0  # the lattice keeps this many sizes off every boundary node
@@ -377,13 +388,7 @@ def _separate(X, P0):
     the origin, where floats are coarse) go back to their distinct §2
     positions; each round reverts at least one node, so it ends."""
     for _ in range(len(X)):
-        order = np.lexsort((X[:, 1], X[:, 0]))  # equal points end up side by side
-        S = X[order]
-        same = (S[1:, 0] == S[:-1, 0]) & (S[1:, 1] == S[:-1, 1])
-        shared = np.zeros(len(X), dtype=bool)
-        shared[order[1:][same]] = True
-        shared[order[:-1][same]] = True
-        back = shared & np.any(X != P0, axis=1)
+        back = shared_positions(X) & np.any(X != P0, axis=1)
         if not back.any():
             return
         X[back] = P0[back]
@@ -396,15 +401,45 @@ def _triangulate(X, segments):
         raise MeshingError(f"mesh: re-triangulation failed: {error}") from error
 
 
+def _retriangulate_moved(X, mesh, segments):
+    """§3.5's re-triangulation after the forces: Lawson's flips from the §2
+    connectivity when the forces turned no triangle over (exact orientation;
+    the boundary nodes stay, so it is still a valid triangulation of the
+    domain, and the flips reach its constrained Delaunay triangulation, the
+    triangles a fresh build gives when that is unique), or, after the frontal
+    §2, turned over only a few that a local re-triangulation mends
+    (:mod:`bubblemesh._untangle`); else a fresh CDT.  After the frontal §2
+    and its few force iterations hardly an edge flips.  (Centroid insertion
+    runs on small domains or turns many triangles over in its longer force
+    run; a mended patch renumbers triangles, which the greedy valence flips
+    follow, and on small meshes that can cost some of the mean for no time
+    worth having.)"""
+    tri, nbr = np.array(mesh.triangles), np.array(mesh.neighbors)
+    turned = turned_over(X, tri)
+    frontal = getattr(mesh.generation, "insertion", "centroid") == "frontal"
+    if frontal and 0 < turned.sum() <= UNTANGLE and untangle(X, tri, nbr, segments, turned):
+        turned = turned_over(X, tri)
+    if not turned.any():
+        keys = segment_keys(segments, len(X))
+        first = np.flatnonzero(non_delaunay_mask(X, tri, nbr, keys))
+        if lawson_flips(X, tri, nbr, keys, 4 * len(tri), first) >= 0:
+            return tri, nbr
+    return _triangulate(X, segments)
+
+
 def _retriangulate_unless_worse(X, segments, triangles, neighbors):
     """The CDT of the moved nodes, unless it lowers the smallest radius ratio
     (then the current connectivity stays: valid, since every move kept it so).
     The CDT comes from Lawson's flips on the current, valid connectivity (the
-    nodes moved a little, so few edges flip); a full CDT if they run long."""
-    tri, nbr = np.array(triangles), np.array(neighbors)
-    flips = delaunay_flips(X, tri, nbr, segment_keys(segments, len(X)), 4 * len(tri))
-    if flips == 0:
+    nodes moved a little, so few edges flip, often none); a full CDT if they
+    run long."""
+    keys = segment_keys(segments, len(X))
+    if not non_delaunay_mask(X, triangles, neighbors, keys).any():
         return triangles, neighbors  # already the CDT
+    tri, nbr = np.array(triangles), np.array(neighbors)
+    flips = delaunay_flips(X, tri, nbr, keys, 4 * len(tri))
+    if flips == 0:
+        return triangles, neighbors
     if flips < 0:
         tri, nbr = _triangulate(X, segments)
     if triangle_quality(X, tri).min() >= triangle_quality(X, triangles).min():
@@ -412,13 +447,30 @@ def _retriangulate_unless_worse(X, segments, triangles, neighbors):
     return triangles, neighbors
 
 
-def _polish(X, triangles, neighbors, segments, n_b, rounds, sweeps, movable):
+class _Stars:
+    """:func:`stars` of the triangles array last asked for, kept by identity: a
+    re-triangulation that changes nothing returns the very array it was
+    given.  Only for arrays that nothing changes in place."""
+
+    def __init__(self):
+        self.triangles = None
+
+    def __call__(self, triangles, n):
+        if triangles is not self.triangles:
+            self.ptr, self.idx = stars(triangles, n)
+            self.triangles = triangles
+        return self.ptr, self.idx
+
+
+def _polish(X, triangles, neighbors, segments, n_b, rounds, sweeps, movable, star_of=None):
     """Guarded smoothing alternating with re-triangulation; a re-triangulation
     that would lower the smallest radius ratio is not taken (the smoothed
-    connectivity stays, valid by construction).  X is updated in place."""
+    connectivity stays, valid by construction).  X is updated in place.
+    ``star_of``: a :class:`_Stars` to share with the next step."""
+    star_of = star_of or _Stars()
     moves = 0
     for _ in range(rounds):
-        ptr, idx = stars(triangles, len(X))
+        ptr, idx = star_of(triangles, len(X))
         taken = guarded_smooth(X, triangles, ptr, idx, n_b, sweeps, movable)
         taken += compass_polish(X, triangles, ptr, idx, n_b, POOR, movable)
         moves += taken
@@ -436,7 +488,7 @@ def _node_sizes(mesh, X, size_field):
     return np.asarray(mesh.radii, dtype=np.float64) / _EQUILATERAL_RADIUS
 
 
-def _settle(X, triangles, neighbors, segments, n_b, h, movable):
+def _settle(X, triangles, neighbors, segments, n_b, h, movable, star_of=None):
     """Settle the nodes and the valences, never lowering the smallest radius
     ratio (each pass keeps every star at least min(its worst, max(mesh minimum,
     KEEP)); X in place): ODT (:mod:`bubblemesh._odt`) alternating with the CDT,
@@ -444,11 +496,12 @@ def _settle(X, triangles, neighbors, segments, n_b, h, movable):
     valid and conforming but need not be constrained-Delaunay) and corner
     splits (:mod:`bubblemesh._corners`), then gradient steps on each star's
     mean ratio (a compass search where they are blocked).  Returns (triangles,
-    neighbors, moves, flips)."""
+    neighbors, moves, flips).  ``star_of``: a :class:`_Stars` from the smoothing."""
+    star_of = star_of or _Stars()
     moves = 0
     for _ in range(ODT_ROUNDS):
         floor = max(float(triangle_quality(X, triangles).min(initial=1.0)), KEEP)
-        ptr, idx = stars(triangles, len(X))
+        ptr, idx = star_of(triangles, len(X))
         taken, _ = odt_smooth(X, triangles, ptr, idx, h, n_b, ODT_SWEEPS, movable, floor, 1e-3)
         moves += taken
         if taken == 0:
@@ -486,17 +539,19 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
                                                       momentum)
     _separate(X, P0)
     clock.lap("forces")
-    triangles, neighbors = _triangulate(X, segments)
+    triangles, neighbors = _retriangulate_moved(X, mesh, segments)
     movable = np.ones(n, dtype=np.bool_)
     movable[np.unique(segments)] = False  # segment endpoints never move
     movable[:n_b] = False  # nor boundary nodes and free points
+    star_of = _Stars()
     triangles, neighbors, moves = _polish(X, triangles, neighbors, segments, n_b,
-                                          smoothing_rounds, smoothing_sweeps, movable)
+                                          smoothing_rounds, smoothing_sweeps, movable, star_of)
     settled, flips = 0, 0
     if settle:
         clock.lap("smoothing")
         triangles, neighbors, settled, flips = _settle(
-            X, triangles, neighbors, segments, n_b, _node_sizes(mesh, X, size_field), movable)
+            X, triangles, neighbors, segments, n_b, _node_sizes(mesh, X, size_field), movable,
+            star_of)
         clock.lap("settling")
     fallback = "none"
     for _ in range(8):  # the guarantee: revert the nodes of triangles below q0
@@ -513,7 +568,9 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
         movable[nodes] = False
         _separate(X, P0)  # a moved node may sit on a reverted one's §2 position
         triangles, neighbors = _triangulate(X, segments)
-    if triangle_quality(X, triangles).min(initial=1.0) < q0:
+        q = None  # the ratios of the mesh before this revert
+    q_final = float((q if q is not None else triangle_quality(X, triangles)).min(initial=1.0))
+    if q_final < q0:
         fallback = "generation"  # the §2 mesh, smoothed: never worse by construction
         X = P0.copy()
         triangles = np.array(mesh.triangles)
@@ -523,8 +580,8 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
         movable[:n_b] = False
         triangles, neighbors, moves = _polish(X, triangles, neighbors, segments, n_b,
                                               smoothing_rounds, smoothing_sweeps, movable)
+        q_final = float(triangle_quality(X, triangles).min(initial=1.0))
     clock.lap("smoothing")
-    q_final = float(triangle_quality(X, triangles).min(initial=1.0))
     stats = RobustOptimizationStats(
         iterations=iterations, max_displacement=largest, blocked_moves=blocked,
         list_builds=builds, list_layouts=0, amplification=amplification, rings=rings,

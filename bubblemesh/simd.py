@@ -4,16 +4,19 @@ Eq. 9 (paper §3.4) needs the length l and its reciprocal 1 / l of every
 nearby pair, each pass.  A square root and a division per pair kept the
 divider of the CPU busy for half of the eq. 9 loop, and LLVM does not pair
 them up across loop iterations by itself.  :func:`roots_and_reciprocals`
-computes two of each with one packed instruction each.  IEEE square root and
-division are correctly rounded lane by lane, so the bits are those of the
-scalar operations.  Without the JIT it is plain Python.
+computes two of each with one packed instruction each.  The gradient of a
+star's mean radius ratio (the default mesher's polish) divides both
+coordinates by the same lengths: :func:`quotients` makes two divisions one
+packed instruction.  IEEE square root and division are correctly rounded
+lane by lane, so the bits are those of the scalar operations.  Without the
+JIT they are plain Python.
 """
 
 import math
 
 import numba
 
-__all__ = ["roots_and_reciprocals"]
+__all__ = ["quotients", "roots_and_reciprocals"]
 
 if numba.config.DISABLE_JIT:  # type: ignore[attr-defined]
 
@@ -22,6 +25,10 @@ if numba.config.DISABLE_JIT:  # type: ignore[attr-defined]
         root_a, root_b = math.sqrt(a), math.sqrt(b)
         return (root_a, root_b, 1.0 / root_a if root_a > 0.0 else math.inf,
                 1.0 / root_b if root_b > 0.0 else math.inf)
+
+    def quotients(a, b, c, d):
+        """(a / c, b / d); a zero divisor raises (the kernels never pass one)."""
+        return a / c, b / d
 
 else:
     from llvmlite import ir
@@ -52,3 +59,25 @@ else:
             return context.make_tuple(builder, signature.return_type, values)
 
         return types.UniTuple(types.float64, 4)(a, b), codegen
+
+    @intrinsic
+    def quotients(typingctx, a, b, c, d):
+        """(a / c, b / d) of four float64 as one packed division."""
+        if any(x != types.float64 for x in (a, b, c, d)):
+            return None
+
+        def codegen(context, builder, signature, args):
+            double = ir.DoubleType()
+            pair = ir.VectorType(double, 2)
+            lanes = [ir.IntType(32)(0), ir.IntType(32)(1)]
+            packed = []
+            for first, second in ((args[0], args[1]), (args[2], args[3])):
+                vector = ir.Constant(pair, ir.Undefined)
+                for lane, value in zip(lanes, (first, second)):
+                    vector = builder.insert_element(vector, value, lane)
+                packed.append(vector)
+            quotient = builder.fdiv(*packed)
+            values = [builder.extract_element(quotient, lane) for lane in lanes]
+            return context.make_tuple(builder, signature.return_type, values)
+
+        return types.UniTuple(types.float64, 2)(a, b, c, d), codegen

@@ -106,6 +106,51 @@ def test_verlet_lists_change_no_bit(case):
             assert np.array_equal(getattr(pruned, name), getattr(reference, name)), (
                 f"skin={skin} changed {name}")
 
+@pytest.mark.parametrize("beta", [0.0, 0.7])
+def test_move_step_is_eq8(beta):
+    """The eq. 8 step of the move kernel against the formula evaluated pair by
+    pair in plain Python: the bits of the documented one-division form
+    ((r_i + r_j) (1 / l) - 1, summed in list order) and, within rounding, the
+    paper's (r_i + r_j - l) / l.  Lists of odd and even length (the kernel
+    pairs entries up) and two coincident nodes (no force between them); no
+    boundary in reach, so every step is taken whole."""
+    import math
+
+    from bubblemesh._forces import move
+    from bubblemesh.optimization import node_adjacency, ring_neighbors
+
+    mesh = bm.generate(bm.Domain.from_loops(S.disk(40).loops))
+    n, n_b = len(mesh.points), mesh.n_boundary
+    ptr, idx = ring_neighbors(*node_adjacency(mesh.triangles, mesh.neighbors, n), n, 3)
+    X = np.array(mesh.points)
+    X[n_b + 1] = X[idx[ptr[n_b + 1]]]  # coincident with its first listed neighbour
+    R = np.asarray(mesh.radii) * 1.7
+    start, count = ptr[:-1].copy(), np.diff(ptr)
+    assert len(np.unique(count[n_b:] % 2)) == 2, "want lists of odd and even length"
+    rng = np.random.default_rng(1)
+    V = rng.normal(scale=1e-3, size=X.shape)
+    Xn, V_kernel = np.empty_like(X), V.copy()
+    home = np.zeros(n, np.int64)
+    move(X, R, Xn, home, start, count, idx.astype(np.int32), np.zeros(len(idx)), False, n_b,
+         0.2, X, mesh.triangles, mesh.neighbors, np.full(n, np.inf), X.copy(), R.copy(), 0.3,
+         V_kernel, beta)
+    for i in range(n_b, n):
+        fx = fy = gx = gy = 0.0
+        for j in idx[ptr[i]:ptr[i + 1]]:
+            dx, dy = float(X[i, 0] - X[j, 0]), float(X[i, 1] - X[j, 1])
+            length = math.sqrt(dx * dx + dy * dy)
+            w = 1.0 / length if length > 0.0 else 0.0
+            scale = max((R[i] + R[j]) * w - 1.0, 0.0)
+            fx, fy = fx + scale * dx, fy + scale * dy
+            paper = max((R[i] + R[j] - length) / length, 0.0) if length > 0.0 else 0.0
+            gx, gy = gx + paper * dx, gy + paper * dy
+        vx, vy = (beta * V[i, 0], beta * V[i, 1]) if beta > 0.0 else (0.0, 0.0)
+        expected = (X[i, 0] + 0.2 * fx + (0.2 / 0.2) * vx, X[i, 1] + 0.2 * fy + (0.2 / 0.2) * vy)
+        assert (Xn[i, 0], Xn[i, 1]) == expected, f"node {i}"
+        assert np.allclose(Xn[i], (X[i, 0] + 0.2 * gx + vx, X[i, 1] + 0.2 * gy + vy),
+                           rtol=0, atol=1e-12), f"node {i}"
+
+
 def test_optimize_does_not_mutate_its_input():
     case = S.square_with_hole()
     mesh = bm.generate(bm.Domain.from_loops(list(case.loops)))
@@ -155,18 +200,19 @@ def test_generate_rejects_negative_max_insertions():
         bm.generate(bm.Domain.from_loops(S.disk(24).loops), max_insertions=-1)
 
 
-@pytest.mark.parametrize("per_node", [48, 2])
-def test_ring_neighbors_are_graph_balls(per_node):
+@pytest.mark.parametrize("per_node, sides", [(48, 160), (2, 160), (48, 5)])
+def test_ring_neighbors_are_graph_balls(per_node, sides):
     """§3.3's nearby nodes: node i's list holds exactly the nodes at 1..3 edges
     from i (graph distances from scipy's csgraph, on edges taken from the
     triangles), each once, nearer rings first.  ~2,400 nodes, so the work is
-    split into blocks; per_node=2 forces the overflow restart."""
+    split into blocks; per_node=2 forces the overflow restart; a pentagon's
+    few nodes all lie within 3 rings of each other."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import shortest_path
 
     from bubblemesh.optimization import node_adjacency, ring_neighbors
 
-    mesh = bm.generate(bm.Domain.from_loops(S.disk(160).loops))
+    mesh = bm.generate(bm.Domain.from_loops(S.disk(sides).loops))
     n = len(mesh.points)
     edges = np.concatenate([mesh.triangles[:, [0, 1]], mesh.triangles[:, [1, 2]],
                             mesh.triangles[:, [2, 0]]])
@@ -174,7 +220,7 @@ def test_ring_neighbors_are_graph_balls(per_node):
     hops = shortest_path(graph.tocsr(), directed=False, unweighted=True)
     ptr, idx = ring_neighbors(*node_adjacency(mesh.triangles, mesh.neighbors, n), n, 3,
                               per_node=per_node)
-    assert n > 2048
+    assert n > 2048 or sides < 10
     for i in range(n):
         ring = idx[ptr[i]:ptr[i + 1]]
         d = hops[i, ring]
@@ -183,3 +229,27 @@ def test_ring_neighbors_are_graph_balls(per_node):
         assert np.all(np.diff(d) >= 0), f"node {i}: rings out of order"
         assert len(ring) == np.count_nonzero((hops[i] >= 1) & (hops[i] <= 3)), (
             f"node {i}: missing neighbours")
+
+
+@pytest.mark.parametrize("reach", [0.01, 0.05, 10.0])
+def test_boundary_clearance_is_the_nearest_midpoint_bound(reach):
+    """The walk-free radius of each node (a grid search for the nearest segment
+    midpoint, stopped at a horizon) against every midpoint in numpy: half of
+    (min(nearest midpoint distance, L / 2 + 2 reach) - L / 2), at least 0,
+    bit for bit; and a true lower bound on the distance to every segment."""
+    from bubblemesh._inside import boundary_clearance
+
+    mesh = bm.generate(bm.Domain.from_loops(S.square_with_hole().loops))
+    P, seg, n_b = np.asarray(mesh.points), np.asarray(mesh.segments), mesh.n_boundary
+    got = boundary_clearance(P, seg, n_b, reach)
+    ends = P[seg]
+    mid = ends.mean(axis=1)
+    longest = float(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1).max())
+    dist = np.sqrt(((P[n_b:, None, :] - mid[None, :, :]) ** 2).sum(axis=-1)).min(axis=1)
+    nearest = np.minimum(dist, 0.5 * longest + 2.0 * reach)
+    assert np.array_equal(got[:n_b], np.zeros(n_b))
+    assert np.array_equal(got[n_b:], 0.5 * np.maximum(nearest - 0.5 * longest, 0.0))
+    a, b = ends[:, 0], ends[:, 1]
+    t = np.clip((((P[n_b:, None] - a) * (b - a)).sum(-1)) / ((b - a) ** 2).sum(-1), 0, 1)
+    to_segment = np.linalg.norm(P[n_b:, None] - (a + t[..., None] * (b - a)), axis=-1).min(1)
+    assert np.all(2 * got[n_b:] <= to_segment + 1e-12)

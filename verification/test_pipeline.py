@@ -300,3 +300,21 @@ def test_near_degenerate_inputs_give_a_mesh_or_a_meshing_error(seed):
             assert "more than" in str(error)
             return
     assert fuzz.check_against_input(mesh, domain) == ""
+
+
+_coordinates = st.sampled_from([0.0, -0.0, 1.0, 0.5, -3.25, 1e300, 1e-300, 2.0**52 + 1.0])
+
+
+@given(st.lists(st.tuples(_coordinates, _coordinates), min_size=0, max_size=40),
+       st.lists(st.tuples(st.floats(-1e6, 1e6), st.floats(-1e6, 1e6)), max_size=40))
+def test_shared_positions_are_the_repeated_points(grid, scattered):
+    """The coincident-node mask (a hash table) against numpy: a row is shared
+    iff np.unique counts its coordinates more than once (-0.0 counts as 0.0)."""
+    from bubblemesh._coincident import shared_positions
+
+    X = np.array(grid + scattered, dtype=np.float64).reshape(-1, 2)
+    if not len(X):
+        assert shared_positions(X).shape == (0,)
+        return
+    _, inverse, counts = np.unique(X + 0.0, axis=0, return_inverse=True, return_counts=True)
+    assert np.array_equal(shared_positions(X), counts[inverse.ravel()] > 1)

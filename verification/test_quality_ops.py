@@ -187,6 +187,64 @@ def test_delaunay_flips_turn_a_valid_mesh_into_the_constrained_delaunay_one(loop
         assert O.canonical_triangles(tri) == O.canonical_triangles(ref)
 
 
+@given(corner_domains(max_holes=2), st.integers(0, 2**32 - 1))
+def test_the_non_delaunay_mask_is_the_exact_local_test(loops, seed):
+    """non_delaunay_mask (each edge once, in parallel) marks the interior
+    non-segment edges the exact oracle finds not locally Delaunay: none on the
+    CDT, some after relaxed quality flips.  Lawson's flips seeded with just
+    those edges reach a constrained Delaunay triangulation (exact oracle), the
+    same triangles as the flips that look at every edge when it is unique."""
+    from bubblemesh._flips import lawson_flips, non_delaunay_mask
+    from bubblemesh.verify import delaunay as exact_delaunay
+    from bubblemesh.verify.exact import ExactPoints
+    from bubblemesh.verify.topology import HalfEdges
+
+    m, _ = _sized(loops, 0.2)
+    X = np.array(m.points)
+    tri, nbr = np.array(m.triangles), np.array(m.neighbors)
+    keys = segment_keys(np.asarray(m.segments), len(X))
+    rng = np.random.default_rng(seed)
+    for relax in (False, True):
+        if relax:
+            improve_flips(X, tri, nbr, keys, rng.integers(1, 8, len(X)), 3, 0.0)
+        H = HalfEdges(tri, len(X))
+        bad = exact_delaunay.local_violations(ExactPoints(X), H, np.ones(len(tri), bool),
+                                              np.asarray(m.segments).reshape(-1, 2))
+        want = {(min(int(H.u[h]), int(H.v[h])), max(int(H.u[h]), int(H.v[h]))) for h in bad}
+        marked = np.argwhere(non_delaunay_mask(X, tri, nbr, keys))
+        got = [tuple(sorted((int(tri[t, (k + 1) % 3]), int(tri[t, (k + 2) % 3]))))
+               for t, k in marked]
+        assert len(got) == len(set(got)) and set(got) == want
+    seeded, s_nbr = tri.copy(), nbr.copy()
+    first = np.flatnonzero(non_delaunay_mask(X, tri, nbr, keys))
+    assert lawson_flips(X, seeded, s_nbr, keys, 4 * len(tri), first) >= len(want) > 0
+    O.check_valid(X, seeded, s_nbr)
+    O.check_constrained_delaunay(X, seeded, m.segments)
+    delaunay_flips(X, tri, nbr, keys, 4 * len(tri))
+    if O.delaunay_is_unique(X, tri, m.segments):
+        assert O.canonical_triangles(seeded) == O.canonical_triangles(tri)
+
+
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_turned_over_counts_the_triangles_not_counter_clockwise(loops, seed):
+    """turned_over (a flag per triangle) against exact rational orientation,
+    with nodes moved at random (some triangles turned over, some made flat)."""
+    from bubblemesh._flips import turned_over
+
+    m, _ = _sized(loops, 0.2)
+    tri = np.asarray(m.triangles)
+    rng = np.random.default_rng(seed)
+    for scale in (0.0, 0.3, 1.5):
+        X = np.array(m.points)
+        X[m.n_boundary:] += rng.normal(scale=scale * float(np.median(m.radii)),
+                                       size=(len(X) - m.n_boundary, 2))
+        if len(tri) > 1 and scale > 1:
+            a, b, c = tri[0]
+            X[c] = X[a] + 0.5 * (X[b] - X[a]) if c >= m.n_boundary else X[c]  # flat, maybe
+        want = [not _ccw_exact(X[a], X[b], X[c]) for a, b, c in tri]
+        assert turned_over(X, tri).tolist() == want
+
+
 def test_delaunay_flips_stop_at_their_bound():
     """A square split along the wrong diagonal needs one flip: with a bound of
     0 the kernel reports -1 and leaves the mesh as it was."""
@@ -229,6 +287,123 @@ def test_a_gathered_star_rates_a_moved_node_like_the_reference(loops, seed):
                 continue
             q = O.radius_ratio_reference(Y, star)
             np.testing.assert_allclose([worst, mean], [q.min(), q.mean()], rtol=1e-12, atol=1e-12)
+
+
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_the_early_exit_rating_decides_like_the_full_one(loops, seed):
+    """gathered_beats (stops at the first deciding triangle) says whether the
+    star's smallest ratio beats a bar exactly as the full rating does: bars
+    around that ratio, 0, 1, and moves that turn triangles over."""
+    from bubblemesh._smoothing import gathered_beats
+
+    m, _ = _sized(loops, 0.2)
+    X, tri = np.asarray(m.points), np.asarray(m.triangles)
+    ptr, idx = stars(tri, len(X))
+    buf = star_buffer(ptr)
+    rng = np.random.default_rng(seed)
+    for i in rng.integers(m.n_boundary, len(X), 10) if len(X) > m.n_boundary else ():
+        deg = gather_star(X, tri, ptr, idx, int(i), buf)
+        for p in X[i] + rng.uniform(-0.6, 0.6, (5, 2)) * m.radii[i]:
+            worst = gathered_stats(buf, deg, p[0], p[1])[0]
+            for bar in (0.0, 1.0, worst, np.nextafter(worst, 0.0), np.nextafter(worst, 1.0),
+                        rng.uniform(0.3, 1.0)):
+                assert gathered_beats(buf, deg, p[0], p[1], bar) == (worst > bar)
+
+
+def _star_rows(X, tri, star, i):
+    """Far corners (u, v) of node i's triangles, counter-clockwise."""
+    rows = []
+    for t in star:
+        k = list(tri[t]).index(i)
+        rows.append((tri[t, (k + 1) % 3], tri[t, (k + 2) % 3]))
+    return rows
+
+
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_the_shortest_edge_of_a_gathered_star_is_the_nearest_neighbours_hypot(loops, seed):
+    """shortest_edge (hypot only for near-shortest candidates) against the
+    kernels' hypot over every neighbour, bit for bit (and Python's within an
+    ulp), with the node moved, and at the centre of a regular hexagon (six
+    edges within rounding)."""
+    import math
+
+    from numba import njit
+
+    from bubblemesh._smoothing import shortest_edge
+
+    hypot = njit(lambda x, y: math.hypot(x, y))  # compiled: libm's, as in the kernel
+
+    m, _ = _sized(loops, 0.2)
+    X, tri = np.asarray(m.points), np.asarray(m.triangles)
+    ptr, idx = stars(tri, len(X))
+    buf = star_buffer(ptr)
+    rng = np.random.default_rng(seed)
+    for i in rng.integers(m.n_boundary, len(X), 10) if len(X) > m.n_boundary else ():
+        deg = gather_star(X, tri, ptr, idx, int(i), buf)
+        neighbours = {int(v) for t in idx[ptr[i]:ptr[i + 1]] for v in tri[t] if v != i}
+        for p in (X[i], *(X[i] + rng.uniform(-0.3, 0.3, (3, 2)) * m.radii[i])):
+            want = min(hypot(X[v, 0] - p[0], X[v, 1] - p[1]) for v in neighbours)
+            got = shortest_edge(buf, deg, p[0], p[1])
+            assert got == want
+            assert math.isclose(got, min(math.hypot(*(X[v] - p)) for v in neighbours),
+                                rel_tol=4e-16)
+    angles = np.arange(6) * np.pi / 3
+    hexagon = np.vstack([[0.1, 0.7], 0.1 + np.c_[np.cos(angles), 0.6 + np.sin(angles)]])
+    hexagon[0] = hexagon[1:].mean(axis=0)
+    fan = np.array([[0, k, k % 6 + 1] for k in range(1, 7)])
+    ptr, idx = stars(fan, 7)
+    deg = gather_star(hexagon, fan, ptr, idx, 0, buf)
+    want = min(hypot(*(hexagon[v] - hexagon[0])) for v in range(1, 7))
+    assert shortest_edge(buf, deg, hexagon[0, 0], hexagon[0, 1]) == want
+
+
+def _star_total(X, triangles, i, p):
+    """Sum of eq. 10 over ``triangles`` with node i at p (numpy reference)."""
+    Y = X.copy()
+    Y[i] = p
+    return O.radius_ratio_reference(Y, triangles).sum()
+
+
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_the_mean_gradient_is_the_derivative_of_the_star_ratios(loops, seed):
+    """The gradient of the sum of a star's radius ratios (the polish's
+    direction) against the analytic formula evaluated in plain Python, bit
+    for bit, and against central differences of eq. 10 (numpy)."""
+    from bubblemesh._odt import _mean_gradient
+
+    m, _ = _sized(loops, 0.2)
+    X, tri = np.asarray(m.points), np.asarray(m.triangles)
+    ptr, idx = stars(tri, len(X))
+    buf = star_buffer(ptr)
+    rng = np.random.default_rng(seed)
+    for i in rng.integers(m.n_boundary, len(X), 10) if len(X) > m.n_boundary else ():
+        deg = gather_star(X, tri, ptr, idx, int(i), buf)
+        star = idx[ptr[i]:ptr[i + 1]]
+        p = X[i] + rng.uniform(-0.1, 0.1, 2) * m.radii[i]
+        want = [0.0, 0.0]
+        for e, (u, v) in enumerate(_star_rows(X, tri, star, i)):
+            (ux, uy), (vx, vy) = X[u], X[v]
+            assert tuple(buf[e, :4]) == (ux, uy, vx, vy)
+            a = float(buf[e, 4])  # |uv|, gathered
+            assert abs(a - np.hypot(ux - vx, uy - vy)) <= 1e-15 * a
+            bx, by, cx, cy = p[0] - vx, p[1] - vy, p[0] - ux, p[1] - uy
+            b, c = float(np.sqrt(bx * bx + by * by)), float(np.sqrt(cx * cx + cy * cy))
+            area2 = (ux - p[0]) * (vy - p[1]) - (uy - p[1]) * (vx - p[0])
+            if area2 <= 0.0:
+                continue
+            s = a + b + c
+            r = 4.0 * area2 * area2 / (s * a * b * c)
+            want[0] += r * (2.0 * (uy - vy) / area2 - (bx / b + cx / c) / s - bx / (b * b)
+                            - cx / (c * c))
+            want[1] += r * (2.0 * (vx - ux) / area2 - (by / b + cy / c) / s - by / (b * b)
+                            - cy / (c * c))
+        got = _mean_gradient(buf, deg, p[0], p[1])
+        assert got == tuple(want)
+        h = 1e-6 * m.radii[i]
+
+        fd = [(_star_total(X, tri[star], i, p + d) - _star_total(X, tri[star], i, p - d)) / (2 * h)
+              for d in (np.array([h, 0]), np.array([0, h]))]
+        np.testing.assert_allclose(got, fd, rtol=1e-4, atol=1e-4 * np.abs(fd).max())
 
 
 @S.budget(15)
@@ -310,3 +485,127 @@ def test_the_colour_classes_are_a_proper_colouring_of_the_chosen_nodes(loops, si
     edges = np.vstack([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
     a, b = colour[edges[:, 0]], colour[edges[:, 1]]
     assert not np.any((a >= 0) & (a == b)), "an edge inside one colour class"
+
+
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1), st.floats(0.6, 3.0))
+def test_untangle_mends_triangles_turned_over_by_a_moved_node(loops, seed, reach):
+    """A node pushed across its star (still inside the domain) turns triangles
+    over; untangle either re-triangulates a patch around them, keeping every
+    node and segment, with every triangle counter-clockwise (exact oracle),
+    after which Lawson's flips give a constrained Delaunay triangulation, or
+    reports False and changes nothing."""
+    from bubblemesh._flips import lawson_flips, non_delaunay_mask, turned_over
+    from bubblemesh._untangle import untangle
+
+    m, _ = _sized(loops, 0.2)
+    if len(m.points) == m.n_boundary:
+        return
+    X = np.array(m.points)
+    tri, nbr = np.array(m.triangles), np.array(m.neighbors)
+    rng = np.random.default_rng(seed)
+    i = int(rng.integers(m.n_boundary, len(X)))
+    j = [v for v in tri[(tri == i).any(axis=1)].ravel() if v != i][int(rng.integers(0, 6)) % 3]
+    target = X[i] + reach * (X[j] - X[i])
+    loops = O.loops_from_segments(m.segments)
+    if O.domain_location(X, loops, target) <= 0:
+        return  # the forces keep nodes strictly inside
+    X[i] = target
+    turned = turned_over(X, tri)
+    if not turned.any():
+        return
+    before = tri.copy(), nbr.copy()
+    if not untangle(X, tri, nbr, np.asarray(m.segments), turned):
+        assert np.array_equal(tri, before[0]) and np.array_equal(nbr, before[1])
+        return
+    assert not turned_over(X, tri).any()
+    assert len(np.unique(tri)) == len(X)
+    O.check_valid(X, tri, nbr)
+    O.check_conforming(X, tri, m.segments, area=m.domain.area, rel=1e-9)
+    keys = segment_keys(np.asarray(m.segments), len(X))
+    first = np.flatnonzero(non_delaunay_mask(X, tri, nbr, keys))
+    lawson_flips(X, tri, nbr, keys, 4 * len(tri), first)
+    O.check_constrained_delaunay(X, tri, m.segments)
+
+
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_the_smoothing_gather_is_the_star_its_neighbour_sum_and_the_active_set(loops, seed):
+    """gather_for_smoothing's one pass against its three definitions: the rows
+    of gather_star; the neighbours' coordinates summed in the star's triangle
+    and corner order (plain Python); unchanged exactly when the node was seen
+    and neither it nor a node of its star moved after that."""
+    from bubblemesh._smoothing import gather_for_smoothing
+
+    m, _ = _sized(loops, 0.2)
+    X, tri = np.asarray(m.points), np.asarray(m.triangles)
+    ptr, idx = stars(tri, len(X))
+    buf, ref = star_buffer(ptr), star_buffer(ptr)
+    rng = np.random.default_rng(seed)
+    moved_at = rng.integers(-1, 6, len(X))
+    for i in rng.integers(m.n_boundary, len(X), 10) if len(X) > m.n_boundary else ():
+        for seen in (-1, 2, 4, 7):
+            deg, sx, sy, unchanged = gather_for_smoothing(X, tri, ptr, idx, int(i), buf,
+                                                          moved_at, seen)
+            assert deg == gather_star(X, tri, ptr, idx, int(i), ref)
+            assert np.array_equal(buf[:deg], ref[:deg])
+            want_x = want_y = 0.0
+            for t in idx[ptr[i]:ptr[i + 1]]:
+                for v in tri[t]:
+                    if v != i:
+                        want_x += float(X[v, 0])
+                        want_y += float(X[v, 1])
+            assert (sx, sy) == (want_x, want_y)
+            star = {int(v) for t in idx[ptr[i]:ptr[i + 1]] for v in tri[t]}
+            assert unchanged == (seen >= 0 and moved_at[i] < seen
+                                 and all(moved_at[v] <= seen for v in star))
+
+
+@S.budget(20)
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_the_mean_polish_active_set_changes_no_bit(loops, seed):
+    """mean_polish skips nodes whose last visit moved nothing and whose star
+    has not moved since: the same positions, bit for bit, as visiting every
+    node of every colour class in every sweep."""
+    from bubblemesh._colouring import colour_classes
+    from bubblemesh._odt import _mean_visit
+
+    m, _ = _sized(loops, 0.2)
+    X, tri = np.array(m.points), np.asarray(m.triangles)
+    rng = np.random.default_rng(seed)
+    X[m.n_boundary:] += rng.normal(scale=0.05 * float(np.median(m.radii)),
+                                   size=(len(X) - m.n_boundary, 2))
+    ptr, idx = stars(tri, len(X))
+    movable = np.ones(len(X), bool)
+    movable[: m.n_boundary] = False
+    Y = X.copy()
+    mean_polish(X, tri, ptr, idx, m.n_boundary, 3, movable, 0.5, 4, 1.0, 3)
+    order, colour_ptr = colour_classes(tri, ptr, idx, m.n_boundary, movable)
+    buf = star_buffer(ptr)
+    for _ in range(3):
+        moved = sum(_mean_visit(Y, tri, ptr, idx, i, buf, 0.5, 4, 1.0, 3) for i in order)
+        if moved == 0:
+            break
+    assert np.array_equal(X, Y)
+
+
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_a_star_clearly_fine_by_its_triangles_is_fine_by_the_gathered_rating(loops, seed):
+    """The compass search's pass-over test: where every triangle's ratio (in
+    its own corner order) is at least poor + MARGIN and no node has moved,
+    the star's smallest ratio rated from the node's corner is at least poor;
+    bars at the mesh's own ratios, where the two roundings meet."""
+    from bubblemesh._smoothing import MARGIN, _clearly_fine, triangle_quality
+
+    m, _ = _sized(loops, 0.2)
+    X, tri = np.array(m.points), np.asarray(m.triangles)
+    rng = np.random.default_rng(seed)
+    X[m.n_boundary:] += rng.normal(scale=0.1 * float(np.median(m.radii)),
+                                   size=(len(X) - m.n_boundary, 2))
+    ptr, idx = stars(tri, len(X))
+    buf = star_buffer(ptr)
+    q = triangle_quality(X, tri)
+    touched = np.zeros(len(X), bool)
+    for poor in (0.85, *(q[rng.integers(0, len(q), 3)] - MARGIN)):
+        for i in range(m.n_boundary, len(X)):
+            if _clearly_fine(tri, ptr, idx, i, q, touched, poor):
+                deg = gather_star(X, tri, ptr, idx, i, buf)
+                assert gathered_stats(buf, deg, X[i, 0], X[i, 1])[0] >= poor
