@@ -96,7 +96,8 @@ KEEP = 0.8  # the settling passes may lower a star's worst ratio to max(mesh min
 ODT_ROUNDS, ODT_SWEEPS = 1, 2  # ODT passes, each followed by the CDT
 FLIP_PASSES = 20
 MAX_SCALE = 1e12  # largest domain extent over the smallest size that bm.mesh takes
-MEAN_SWEEPS, MEAN_HALVINGS, MEAN_BELOW = 3, 4, 1.0  # 1.0: every star
+MEAN_SWEEPS, MEAN_HALVINGS = 3, 4
+MEAN_BELOW = {"centroid": 1.0, "frontal": 0.999}  # stars polished for their mean (1.0: all)
 MEAN_STEPS = 3  # gradient steps per star visit before any compass search
 UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
 FRONTAL_ELEMENTS = 1000  # frontal insertion from this many elements of the cap size up
@@ -286,7 +287,8 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
                                clock=clock)
 
         def settle(X, T, N, segments, n_b, movable):
-            return _settle(X, T, N, segments, n_b, _node_sizes(mesh, X, field), movable)[:2]
+            return _settle(X, T, N, segments, n_b, _node_sizes(mesh, X, field), movable,
+                           mean_below=MEAN_BELOW[gen.insertion])[:2]
 
         # Triangle's -a, global and regional: hard bounds
         return bound_areas(mesh, max_area, settle=settle)
@@ -488,15 +490,17 @@ def _node_sizes(mesh, X, size_field):
     return np.asarray(mesh.radii, dtype=np.float64) / _EQUILATERAL_RADIUS
 
 
-def _settle(X, triangles, neighbors, segments, n_b, h, movable, star_of=None):
+def _settle(X, triangles, neighbors, segments, n_b, h, movable, star_of=None,
+            mean_below=1.0):
     """Settle the nodes and the valences, never lowering the smallest radius
     ratio (each pass keeps every star at least min(its worst, max(mesh minimum,
     KEEP)); X in place): ODT (:mod:`bubblemesh._odt`) alternating with the CDT,
     then valence and quality flips (:mod:`bubblemesh._flips`; the mesh stays
     valid and conforming but need not be constrained-Delaunay) and corner
     splits (:mod:`bubblemesh._corners`), then gradient steps on each star's
-    mean ratio (a compass search where they are blocked).  Returns (triangles,
-    neighbors, moves, flips).  ``star_of``: a :class:`_Stars` from the smoothing."""
+    mean ratio (a compass search where they are blocked) for the stars whose
+    worst ratio is below ``mean_below``.  Returns (triangles, neighbors, moves,
+    flips).  ``star_of``: a :class:`_Stars` from the smoothing."""
     star_of = star_of or _Stars()
     moves = 0
     for _ in range(ODT_ROUNDS):
@@ -519,7 +523,7 @@ def _settle(X, triangles, neighbors, segments, n_b, h, movable, star_of=None):
     ptr, idx = stars(triangles, len(X))
     floor = max(float(triangle_quality(X, triangles).min(initial=1.0)), KEEP)
     moves += mean_polish(X, triangles, ptr, idx, n_b, MEAN_SWEEPS, movable, floor,
-                         MEAN_HALVINGS, MEAN_BELOW, MEAN_STEPS)
+                         MEAN_HALVINGS, mean_below, MEAN_STEPS)
     return triangles, neighbors, moves, int(flips)
 
 
@@ -551,7 +555,7 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
         clock.lap("smoothing")
         triangles, neighbors, settled, flips = _settle(
             X, triangles, neighbors, segments, n_b, _node_sizes(mesh, X, size_field), movable,
-            star_of)
+            star_of, MEAN_BELOW[_insertion(mesh)])
         clock.lap("settling")
     fallback = "none"
     for _ in range(8):  # the guarantee: revert the nodes of triangles below q0
@@ -591,6 +595,11 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
     return Mesh(points=X, triangles=triangles, neighbors=neighbors, radii=R, segments=segments,
                 n_boundary=n_b, domain=mesh.domain, generation=mesh.generation,
                 optimization=stats)
+
+
+def _insertion(mesh):
+    """How the §2 mesh was made: 'frontal' or 'centroid' (the paper's)."""
+    return getattr(mesh.generation, "insertion", "centroid")
 
 
 def _first_row_first(mesh):
