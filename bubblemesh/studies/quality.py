@@ -70,9 +70,23 @@ def _paper_loops():
     return {name: [np.asarray(lp) for lp in case.loops] for name, case in paper_cases().items()}
 
 
+def triangle_data() -> Path | None:
+    """The folder of example .poly files that the ``triangle`` package ships
+    (A.poly, double_hex3.poly, ...), or None without it."""
+    try:
+        import triangle
+    except ImportError:
+        return None
+    folder = Path(triangle.__file__).parent / "data"
+    return folder if folder.is_dir() else None
+
+
 def cases(data: Path | None):
     """(name, loops, bm.mesh keyword arguments): corner-only inputs get
-    max_area = area / 200, the others their own spacing."""
+    max_area = area / 200, the others their own spacing.  ``data``: the folder
+    of Triangle's A.poly and double_hex3.poly, by default the ``triangle``
+    package's (:func:`triangle_data`)."""
+    data = data if data is not None else triangle_data()
     for name, loops in _paper_loops().items():
         yield name, loops, {}
     per200 = "per200"
@@ -594,7 +608,8 @@ def timings(n=100_000, repeats=3):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=None,
-                        help="folder with Triangle's A.poly and double_hex3.poly")
+                        help="folder with Triangle's A.poly and double_hex3.poly (default: "
+                             "the triangle package's examples)")
     parser.add_argument("--big", action="store_true",
                         help="add the benchmark's 100k-element uniform disk to the table")
     parser.add_argument("--timings", action="store_true",
