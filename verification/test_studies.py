@@ -242,7 +242,7 @@ def test_study_on_a_local_cluster_rerun_and_inline_agree(cases_dir, tmp_path):
     pd = pytest.importorskip("pandas")
     pd.testing.assert_frame_equal(_untimed(again.table), _untimed(df), check_dtype=False)
     stored = read_results(tmp_path / "local")
-    assert len(stored) == 8 and set(stored["key"]) == set(df["key"])
+    assert list(stored["key"]) == list(df["key"])  # the study's order, whoever finished first
 
     inline = run_study(study, tmp_path / "inline", scheduler="inline", progress=False)
     pd.testing.assert_frame_equal(_untimed(inline.table).drop(columns="mesh_file"),

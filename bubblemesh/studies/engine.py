@@ -131,6 +131,7 @@ class _Sink:
     def __init__(self, out, old, study: Study, rows: dict[str, dict]):
         self.out = None if out is None else Path(out)
         self.old, self.study, self.rows = old, study, rows
+        self.order = {c.key: i for i, c in enumerate(study.cells())}
         self.last = time.monotonic()
 
     def add(self, cell: Cell, result: dict[str, Any]) -> None:
@@ -146,7 +147,9 @@ class _Sink:
             return
         import pandas as pd
 
-        new = frame(list(self.rows.values()))
+        # the study's cell order, not the order the workers finished in: the same file every run
+        keys = sorted(self.rows, key=lambda k: self.order.get(k, len(self.order)))
+        new = frame([self.rows[k] for k in keys])
         if self.old is not None and not self.old.empty:
             kept = self.old[~self.old["key"].astype(str).isin(self.rows)]
             new = frame(pd.concat([kept, new], ignore_index=True).to_dict("records"))
