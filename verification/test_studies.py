@@ -530,3 +530,25 @@ def test_gmsh_with_a_uniform_size_and_triangle_at_tiny_areas_match_the_count():
                        run_triangle(m, [], count)):
             r = measure(disk, p, tri)
             assert abs(r["N"] - count) <= 0.03 * count and r["valid"], (radius, r)
+
+
+def test_a_cells_key_changes_with_the_source_that_computes_it(tmp_path):
+    """A copy of the package with one comment added reports another version, so
+    a study run by changed code never reuses the old code's rows."""
+    import bubblemesh
+
+    copy = tmp_path / "bubblemesh"
+    shutil.copytree(Path(bubblemesh.__file__).parent, copy,
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    probe = ("import bubblemesh; from bubblemesh.studies.study import bubblemesh_version; "
+             f"assert bubblemesh.__file__.startswith({str(copy)!r}); print(bubblemesh_version())")
+
+    def version():
+        return subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, capture_output=True,
+                              text=True, check=True).stdout.strip()
+
+    before = version()
+    with open(copy / "pipeline.py", "a") as f:
+        f.write("# changed\n")
+    after = version()
+    assert before.startswith(bubblemesh.__version__ + "+") and after != before

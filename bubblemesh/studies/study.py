@@ -41,9 +41,21 @@ _TIMING_LOCK = threading.Lock()
 
 
 def bubblemesh_version() -> str:
-    import bubblemesh
+    """The package version and a digest of its source: a cell's key changes with
+    the code that computes it, so a study never reuses rows of older code."""
+    if not _SOURCE:
+        import bubblemesh
 
-    return str(bubblemesh.__version__)
+        root = Path(bubblemesh.__file__).parent
+        digest = hashlib.sha256()
+        for path in sorted(root.rglob("*.py")):
+            digest.update(path.relative_to(root).as_posix().encode() + b"\0")
+            digest.update(path.read_bytes())
+        _SOURCE.append(f"{bubblemesh.__version__}+{digest.hexdigest()[:12]}")
+    return _SOURCE[0]
+
+
+_SOURCE: list[str] = []
 
 
 _VERSIONS: dict[str, str] = {}
