@@ -151,7 +151,9 @@ class _Sink:
         keys = sorted(self.rows, key=lambda k: self.order.get(k, len(self.order)))
         new = frame([self.rows[k] for k in keys])
         if self.old is not None and not self.old.empty:
-            kept = self.old[~self.old["key"].astype(str).isin(self.rows)]
+            keys = self.old["key"].astype(str)  # other studies' rows, and this one's current cells
+            kept = self.old[~keys.isin(self.rows) & ((self.old["study"] != self.study.name)
+                                                     | keys.isin(self.order))]
             new = frame(pd.concat([kept, new], ignore_index=True).to_dict("records"))
         write_results(new, self.out)
         self.last = time.monotonic()

@@ -99,9 +99,12 @@ def rewrite_report(out: str | Path = "reports") -> bool:
     meta = json.loads(record.read_text())
     study = load_study(meta.get("definition") or bundled_folder() / "paper.toml",
                        cases_dir=meta.get("cases_dir"), only_cases=meta.get("cases"))
-    keys = {c.key for c in study.cells()}
-    render(study, table[table["key"].astype(str).isin(keys)].reset_index(drop=True), out,
-           meta=meta)
+    version = meta.get("versions", {}).get("bubblemesh")  # the code that made the rows
+    keys = {c.key for c in study.cells(version)}
+    rows = table[table["key"].astype(str).isin(keys)].reset_index(drop=True)
+    if rows.empty:
+        return False
+    render(study, rows, out, meta=meta)
     return True
 
 
