@@ -407,13 +407,19 @@ class Domain:
         )
 
     @classmethod
-    def from_shapely(cls, polygon, spacing: float | None = None, *, constraints=(),
-                     points=(), names: Mapping[str, int] | None = None) -> Domain:
+    def from_shapely(cls, polygon, spacing: float | None = None, *, size=None,
+                     gradation: float = 0.25, constraints=(), points=(),
+                     names: Mapping[str, int] | None = None) -> Domain:
         """Build a Domain from a shapely ``Polygon`` or ``MultiPolygon``.
 
-        With ``spacing=None`` the ring vertices are the boundary nodes.  Otherwise
-        each ring edge is split into ``ceil(length / spacing)`` equal pieces; the
-        ring vertices are kept, so corners stay sharp.  ``constraints``
+        With ``spacing=None`` and ``size=None`` the ring vertices are the boundary
+        nodes.  ``spacing``: each ring edge is split into ``ceil(length /
+        spacing)`` equal pieces.  ``size`` (a number or a vectorised callable
+        ``h(xy) -> (n,)``): the edges are sampled from the size field that
+        :func:`bubblemesh.mesh` builds from the corners, the local feature size
+        and ``size``, limited to ``gradation`` (so a narrow gap gets short
+        pieces too).  Either way the ring vertices are kept, so corners stay
+        sharp.  ``constraints``
         (LineStrings, LinearRings or a MultiLineString) become interior
         constraints, ``points`` (Points, a MultiPoint or an (m, 2) array) free
         nodes; with either, or several polygon parts, the domain is a planar
@@ -429,6 +435,8 @@ class Domain:
         parts = _polygon_parts(polygon, "the polygon")
         loops = _rings(parts)
         lines = [np.asarray(g.coords, dtype=np.float64)[:, :2] for g in _geoms(constraints)]
+        if spacing is not None and size is not None:
+            raise ValueError("from_shapely: give spacing or size, not both")
         if spacing is not None:
             if not (math.isfinite(spacing) and spacing > 0):
                 raise ValueError(f"spacing must be a positive finite number, got {spacing!r}")
@@ -436,8 +444,22 @@ class Domain:
             lines = [_split_polyline(line, spacing) for line in lines]
         free = _point_array(points)
         if len(parts) == 1 and not lines and not len(free) and not names:
-            return cls.from_loops(loops)  # as before: a polygon with holes
-        return cls.from_pslg(loops=loops, constraints=lines, points=free, names=names)
+            domain = cls.from_loops(loops)  # as before: a polygon with holes
+        else:
+            domain = cls.from_pslg(loops=loops, constraints=lines, points=free, names=names)
+        return domain if size is None else _sampled(domain, size, gradation)
+
+
+def _sampled(domain: Domain, size, gradation: float) -> Domain:
+    """``domain``'s segments split by the size field of ``size`` (bm.mesh's)."""
+    from .pipeline import refined_domain
+    from .sizing import SizeField
+
+    try:
+        field = SizeField.from_domain(domain, size=size, gradation=gradation)
+    except (TypeError, ValueError) as error:
+        raise type(error)(f"from_shapely: {error}") from None
+    return refined_domain(domain, field)
 
 
 def _polygon_parts(geometry, what: str, strict: bool = True) -> list:

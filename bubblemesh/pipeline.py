@@ -248,13 +248,9 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
                                                                  _user_size(size, max_area)),
                                       gradation=gradation)
         _check_scale(domain, field)
-        refined = refine_boundary(domain, field)
+        fine = refined_domain(domain, field)
     except (TypeError, ValueError) as error:
         raise type(error)(f"mesh: {error}") from None
-    try:
-        fine = refined.to_domain()
-    except GeometryError:  # a node an ulp off its segment touches a part a few ulps away
-        fine = refined.exact_only().to_domain()
     clock.lap("sizing")
     frontal = _frontal_wanted(insertion, domain, field)
     seeds = _lattice(fine, field) if frontal else _frontal_seeds(fine)
@@ -295,6 +291,17 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
     except MemoryError:  # sizes far finer than the domain's extent
         raise MeshingError("mesh: not enough memory to optimise the mesh this size field "
                            "asks for (sizes far finer than the domain)") from None
+
+
+def refined_domain(domain, field):
+    """``domain`` with its segments split where ``field`` asks for it
+    (:func:`bubblemesh.refinement.refine_boundary`: the input nodes first and
+    unmoved, the new ones on their segments), as a Domain."""
+    refined = refine_boundary(domain, field)
+    try:
+        return refined.to_domain()
+    except GeometryError:  # a node an ulp off its segment touches a part a few ulps away
+        return refined.exact_only().to_domain()
 
 
 def _frontal_wanted(insertion, domain, field):

@@ -1024,3 +1024,41 @@ def test_from_shapely_without_shapely_says_how_to_install(monkeypatch):
     monkeypatch.setitem(sys.modules, "shapely.geometry", None)
     with pytest.raises(ImportError, match=r"pip install 'bubblemesh\[shapely\]'"):
         Domain.from_shapely(object())
+
+
+def _on_ring_edge_exactly(p, ring):
+    """p lies on an edge of ``ring`` (shapely coordinates), by exact rationals."""
+    x, y = Fraction(float(p[0])), Fraction(float(p[1]))
+    for (ax, ay), (bx, by) in zip(ring[:-1], ring[1:]):
+        ax, ay, bx, by = map(Fraction, (ax, ay, bx, by))
+        if ((bx - ax) * (y - ay) == (by - ay) * (x - ax) and min(ax, bx) <= x <= max(ax, bx)
+                and min(ay, by) <= y <= max(ay, by)):
+            return True
+    return False
+
+
+def test_from_shapely_size_samples_the_rings_from_the_size_field():
+    """With ``size``: the ring vertices kept bit for bit, every other node
+    exactly on an input edge, no piece longer than the size, and a slot
+    narrower than the size sampled at its width."""
+    pytest.importorskip("shapely")
+    from shapely.geometry import box
+
+    shape = box(0, 0, 4, 4).difference(box(1.9, 1, 2.1, 4.5))  # a U, its slot 0.2 wide
+    domain = Domain.from_shapely(shape, size=0.5)
+    P, S = np.asarray(domain.points), np.asarray(domain.segments)
+    ring = list(shape.exterior.coords)
+    for corner in ring:
+        assert (P == corner).all(axis=1).any()
+    assert all(_on_ring_edge_exactly(p, ring) for p in P)
+    length = np.hypot(*(P[S[:, 0]] - P[S[:, 1]]).T)
+    mid = 0.5 * (P[S[:, 0]] + P[S[:, 1]])
+    assert length.max() <= 0.5 * (1 + 1e-9)
+    slot = (abs(mid[:, 0] - 2) < 0.15) & (mid[:, 1] > 1.5)
+    assert slot.sum() >= 2 and length[slot].max() <= 0.2 * (1 + 1e-9)
+    finer = Domain.from_shapely(shape, size=lambda xy: np.full(len(xy), 0.25))
+    assert len(finer.points) > len(P)
+    with pytest.raises(ValueError, match="spacing or size"):
+        Domain.from_shapely(shape, 0.1, size=0.1)
+    with pytest.raises(ValueError, match="from_shapely: size"):
+        Domain.from_shapely(shape, size=-1.0)
