@@ -8,7 +8,7 @@ puts the first row at the apexes of equilateral triangles on the boundary
 edges.  :func:`frontal_seeds` does the same before §2: the apex of every
 boundary segment, on its domain side at sqrt(3)/2 of its length, kept only
 where it has room (no other node, segment midpoint or apex within
-``ROOM`` times the segment length); at corners between 95 and 150 degrees a
+``ROOM`` times the segment length); at corners between 84 and 150 degrees a
 seed on the bisector splits the corner in two.  Near sharper corners and in
 narrow gaps the seeds drop out and §2 fills in as in the paper.  The seeds are ordinary movable
 nodes; whether one is really inside the domain is decided exactly by a walk
@@ -25,7 +25,7 @@ from ._inside import walk_inside
 from .predicates import orient2d
 
 ROOM = 0.7
-CORNER_LOW, CORNER_HIGH = np.radians(95.0), np.radians(150.0)
+CORNER_LOW, CORNER_HIGH = np.radians(84.0), np.radians(150.0)  # two triangles beat one from 81.4
 
 __all__ = ["frontal_seeds", "inside"]
 

@@ -91,7 +91,7 @@ def _sharp_angle(target: float = 0.7) -> float:
 
 
 SHARP_ANGLE = _sharp_angle()  # ~27.2 degrees
-POOR = 0.85  # stars whose worst radius ratio is below this get the compass search
+POOR = 0.875  # stars whose worst radius ratio is below this get the compass search
 KEEP = 0.8  # the settling passes may lower a star's worst ratio to max(mesh minimum, KEEP)
 ODT_ROUNDS, ODT_SWEEPS = 1, 2  # ODT passes, each followed by the CDT
 FLIP_PASSES = 20
@@ -102,6 +102,7 @@ MEAN_STEPS = 3  # gradient steps per star visit before any compass search
 UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
 FRONTAL_ELEMENTS = 1000  # frontal insertion from this many elements of the cap size up
 ITERATIONS = {"centroid": 200, "frontal": 30}  # §3 force iterations by default
+RADII_REFRESH = 10  # §3's radii follow the size field at the nodes' positions this often
 LATTICE_MARGIN = 4.0  # the lattice keeps this many sizes off every boundary node
 
 
@@ -355,12 +356,16 @@ def _frontal_seeds(domain):
     return seeds[inside(domain.points, domain.segments, tri, nbr, seeds, rows)]
 
 
-def _forces(mesh, R, max_iterations, tol, alpha, rings, momentum):
-    """Eq. 7-8 with fixed radii R until the largest relative move < tol.  The
-    frontal seeds hold still like the boundary: released, the forces push
-    seeds out of their pockets between boundary nodes and leave boundary nodes
-    with two triangles, right-angled at best (the smoothing and settling move
-    them later, under their quality guards).
+def _forces(mesh, R, max_iterations, tol, alpha, rings, momentum, radius_of=None):
+    """Eq. 7-8 with radii R (eq. 9 not run) until the largest relative move <
+    tol; with ``radius_of`` (the size field's amplified radius at a position)
+    the movable nodes' radii are read from it every RADII_REFRESH iterations,
+    so a node that drifts up or down a graded field takes the local size
+    along (with fixed radii the nodes round a hundredfold grading never
+    settle).  The frontal seeds hold still like the boundary: released, the
+    forces push seeds out of their pockets between boundary nodes and leave
+    boundary nodes with two triangles, right-angled at best (the smoothing and
+    settling move them later, under their quality guards).
     Returns (positions, iterations, last largest move, blocked moves, builds)."""
     n_b = mesh.n_boundary
     fixed = n_b + int(getattr(mesh.generation, "seeds", 0))
@@ -379,6 +384,9 @@ def _forces(mesh, R, max_iterations, tol, alpha, rings, momentum):
     expired = True
     while iterations < max_iterations:
         iterations += 1
+        if radius_of is not None and RADII_REFRESH and iterations % RADII_REFRESH == 1:
+            R[fixed:] = radius_of(X[fixed:])
+            expired = True
         if expired:
             lists.build(X, R)
         expired, stuck, largest = move(X, R, Xn, home, *lists.arrays, False, fixed, alpha,
@@ -546,8 +554,10 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
     P0 = np.array(mesh.points)
     q0 = float(triangle_quality(P0, np.asarray(mesh.triangles)).min(initial=1.0))
     R = np.asarray(mesh.radii, dtype=np.float64) * amplification
+    radius_of = None if size_field is None else (
+        lambda xy: amplification * size_field.radius(np.ascontiguousarray(xy)))
     X, iterations, largest, blocked, builds = _forces(mesh, R, max_iterations, tol, alpha, rings,
-                                                      momentum)
+                                                      momentum, radius_of)
     _separate(X, P0)
     clock.lap("forces")
     triangles, neighbors = _retriangulate_moved(X, mesh, segments)

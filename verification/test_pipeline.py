@@ -318,3 +318,24 @@ def test_shared_positions_are_the_repeated_points(grid, scattered):
         return
     _, inverse, counts = np.unique(X + 0.0, axis=0, return_inverse=True, return_counts=True)
     assert np.array_equal(shared_positions(X), counts[inverse.ravel()] > 1)
+
+
+@pytest.mark.slow  # 1000 force iterations; minutes as plain Python
+def test_more_iterations_do_not_spoil_a_hundredfold_grading():
+    """A 10x10 square spaced 0.5 around a hole of radius 0.05 spaced 0.005: the
+    mesh after 1000 force iterations is no worse than after 200 (mean and
+    minimum radius ratio, within 0.002), and has no element below 0.7."""
+    s, z = np.arange(0, 10, 0.5), np.zeros(20)
+    square = np.concatenate([np.column_stack(side) for side in
+                             ((s, z), (z + 10, s), (10 - s, z + 10), (z, 10 - s))])
+    t = np.linspace(0, 2 * np.pi, int(round(2 * np.pi * 0.05 / 0.005)), endpoint=False)
+    hole = np.column_stack([5 + 0.05 * np.cos(t), 5 + 0.05 * np.sin(t)])
+    domain = bm.Domain.from_loops([square, hole])
+    q = {}
+    for iterations in (200, 1000):
+        m = bm.mesh(domain, max_iterations=iterations)
+        q[iterations] = O.radius_ratio_reference(m.points, m.triangles)
+    assert q[1000].mean() >= q[200].mean() - 0.002, (q[200].mean(), q[1000].mean())
+    assert q[1000].min() >= q[200].min() - 0.002, (q[200].min(), q[1000].min())
+    assert q[1000].min() >= 0.7
+
