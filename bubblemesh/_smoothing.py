@@ -92,6 +92,21 @@ def star_buffer(ptr):
     return np.empty((most, 5))
 
 
+@njit(cache=True, inline="always")
+def _star_row(X, triangles, t, i, buf, e):
+    """Row e of node i's gathered star from its triangle t: (u, v, |uv|), u and
+    v the far corners counter-clockwise.  Returns (i's corner in t, u, v)."""
+    k = 0 if triangles[t, 0] == i else (1 if triangles[t, 1] == i else 2)
+    u = triangles[t, (k + 1) % 3]
+    v = triangles[t, (k + 2) % 3]
+    buf[e, 0] = X[u, 0]
+    buf[e, 1] = X[u, 1]
+    buf[e, 2] = X[v, 0]
+    buf[e, 3] = X[v, 1]
+    buf[e, 4] = math.sqrt((X[u, 0] - X[v, 0]) ** 2 + (X[u, 1] - X[v, 1]) ** 2)
+    return k, u, v
+
+
 @njit(cache=True)
 def gather_star(X, triangles, ptr, idx, i, buf):
     """Node i's star as rows (u, v, |uv|), u and v the far corners of each
@@ -99,15 +114,7 @@ def gather_star(X, triangles, ptr, idx, i, buf):
     does not depend on where i is.  Returns the star's size."""
     deg = ptr[i + 1] - ptr[i]
     for e in range(deg):
-        t = idx[ptr[i] + e]
-        k = 0 if triangles[t, 0] == i else (1 if triangles[t, 1] == i else 2)
-        u = triangles[t, (k + 1) % 3]
-        v = triangles[t, (k + 2) % 3]
-        buf[e, 0] = X[u, 0]
-        buf[e, 1] = X[u, 1]
-        buf[e, 2] = X[v, 0]
-        buf[e, 3] = X[v, 1]
-        buf[e, 4] = math.sqrt((X[u, 0] - X[v, 0]) ** 2 + (X[u, 1] - X[v, 1]) ** 2)
+        _star_row(X, triangles, idx[ptr[i] + e], i, buf, e)
     return deg
 
 
@@ -157,16 +164,8 @@ def gather_for_smoothing(X, triangles, ptr, idx, i, buf, moved_at, seen):
     sy = 0.0
     deg = ptr[i + 1] - ptr[i]
     for e in range(deg):
-        t = idx[ptr[i] + e]
-        k = 0 if triangles[t, 0] == i else (1 if triangles[t, 1] == i else 2)
-        u = triangles[t, (k + 1) % 3]
-        v = triangles[t, (k + 2) % 3]
+        k, u, v = _star_row(X, triangles, idx[ptr[i] + e], i, buf, e)
         unchanged = unchanged and moved_at[u] <= seen and moved_at[v] <= seen
-        buf[e, 0] = X[u, 0]
-        buf[e, 1] = X[u, 1]
-        buf[e, 2] = X[v, 0]
-        buf[e, 3] = X[v, 1]
-        buf[e, 4] = math.sqrt((X[u, 0] - X[v, 0]) ** 2 + (X[u, 1] - X[v, 1]) ** 2)
         first, second = (v, u) if k == 1 else (u, v)  # the triangle's corner order
         sx += X[first, 0]
         sy += X[first, 1]

@@ -433,8 +433,8 @@ def _retriangulate_moved(X, mesh, segments):
     worth having.)"""
     tri, nbr = np.array(mesh.triangles), np.array(mesh.neighbors)
     turned = turned_over(X, tri)
-    frontal = getattr(mesh.generation, "insertion", "centroid") == "frontal"
-    if frontal and 0 < turned.sum() <= UNTANGLE and untangle(X, tri, nbr, segments, turned):
+    few = 0 < turned.sum() <= UNTANGLE
+    if _insertion(mesh) == "frontal" and few and untangle(X, tri, nbr, segments, turned):
         turned = turned_over(X, tri)
     if not turned.any():
         keys = segment_keys(segments, len(X))

@@ -265,17 +265,24 @@ def _ccw_exact(a, b, c):
     return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax) > 0
 
 
+def _star_samples(loops, seed):
+    """A sized mesh of ``loops``, its stars, a star buffer, a generator from
+    ``seed`` and up to 10 of its interior nodes drawn from it."""
+    m, _ = _sized(loops, 0.2)
+    X, tri = np.asarray(m.points), np.asarray(m.triangles)
+    ptr, idx = stars(tri, len(X))
+    rng = np.random.default_rng(seed)
+    nodes = rng.integers(m.n_boundary, len(X), 10) if len(X) > m.n_boundary else ()
+    return m, X, tri, ptr, idx, star_buffer(ptr), rng, nodes
+
+
 @given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
 def test_a_gathered_star_rates_a_moved_node_like_the_reference(loops, seed):
     """(smallest, mean) ratio of a star with its node moved, from the gathered
     star, against the classical formula; -1 exactly when a triangle of the
     star is not counter-clockwise by exact orientation."""
-    m, _ = _sized(loops, 0.2)
-    X, tri = np.asarray(m.points), np.asarray(m.triangles)
-    ptr, idx = stars(tri, len(X))
-    buf = star_buffer(ptr)
-    rng = np.random.default_rng(seed)
-    for i in rng.integers(m.n_boundary, len(X), 10) if len(X) > m.n_boundary else ():
+    m, X, tri, ptr, idx, buf, rng, nodes = _star_samples(loops, seed)
+    for i in nodes:
         deg = gather_star(X, tri, ptr, idx, int(i), buf)
         star = tri[idx[ptr[i]:ptr[i + 1]]]
         for p in X[i] + rng.uniform(-0.3, 0.3, (5, 2)) * m.radii[i]:
@@ -296,12 +303,8 @@ def test_the_early_exit_rating_decides_like_the_full_one(loops, seed):
     around that ratio, 0, 1, and moves that turn triangles over."""
     from bubblemesh._smoothing import gathered_beats
 
-    m, _ = _sized(loops, 0.2)
-    X, tri = np.asarray(m.points), np.asarray(m.triangles)
-    ptr, idx = stars(tri, len(X))
-    buf = star_buffer(ptr)
-    rng = np.random.default_rng(seed)
-    for i in rng.integers(m.n_boundary, len(X), 10) if len(X) > m.n_boundary else ():
+    m, X, tri, ptr, idx, buf, rng, nodes = _star_samples(loops, seed)
+    for i in nodes:
         deg = gather_star(X, tri, ptr, idx, int(i), buf)
         for p in X[i] + rng.uniform(-0.6, 0.6, (5, 2)) * m.radii[i]:
             worst = gathered_stats(buf, deg, p[0], p[1])[0]
@@ -333,12 +336,8 @@ def test_the_shortest_edge_of_a_gathered_star_is_the_nearest_neighbours_hypot(lo
 
     hypot = njit(lambda x, y: math.hypot(x, y))  # compiled: libm's, as in the kernel
 
-    m, _ = _sized(loops, 0.2)
-    X, tri = np.asarray(m.points), np.asarray(m.triangles)
-    ptr, idx = stars(tri, len(X))
-    buf = star_buffer(ptr)
-    rng = np.random.default_rng(seed)
-    for i in rng.integers(m.n_boundary, len(X), 10) if len(X) > m.n_boundary else ():
+    m, X, tri, ptr, idx, buf, rng, nodes = _star_samples(loops, seed)
+    for i in nodes:
         deg = gather_star(X, tri, ptr, idx, int(i), buf)
         neighbours = {int(v) for t in idx[ptr[i]:ptr[i + 1]] for v in tri[t] if v != i}
         for p in (X[i], *(X[i] + rng.uniform(-0.3, 0.3, (3, 2)) * m.radii[i])):
@@ -371,12 +370,8 @@ def test_the_mean_gradient_is_the_derivative_of_the_star_ratios(loops, seed):
     for bit, and against central differences of eq. 10 (numpy)."""
     from bubblemesh._odt import _mean_gradient
 
-    m, _ = _sized(loops, 0.2)
-    X, tri = np.asarray(m.points), np.asarray(m.triangles)
-    ptr, idx = stars(tri, len(X))
-    buf = star_buffer(ptr)
-    rng = np.random.default_rng(seed)
-    for i in rng.integers(m.n_boundary, len(X), 10) if len(X) > m.n_boundary else ():
+    m, X, tri, ptr, idx, buf, rng, nodes = _star_samples(loops, seed)
+    for i in nodes:
         deg = gather_star(X, tri, ptr, idx, int(i), buf)
         star = idx[ptr[i]:ptr[i + 1]]
         p = X[i] + rng.uniform(-0.1, 0.1, 2) * m.radii[i]
