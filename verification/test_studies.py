@@ -534,12 +534,14 @@ def test_gmsh_with_a_uniform_size_and_triangle_at_tiny_areas_match_the_count():
 
 def test_a_cells_key_changes_with_the_source_that_computes_it(tmp_path):
     """A copy of the package with one comment added reports another version, so
-    a study run by changed code never reuses the old code's rows."""
+    a study run by changed code never reuses the old code's rows; the case files
+    that a wheel installs beside the code (studies/data) do not count, so an
+    installed package and the source tree agree."""
     import bubblemesh
 
     copy = tmp_path / "bubblemesh"
     shutil.copytree(Path(bubblemesh.__file__).parent, copy,
-                    ignore=shutil.ignore_patterns("__pycache__"))
+                    ignore=shutil.ignore_patterns("__pycache__", "data"))
     probe = ("import bubblemesh; from bubblemesh.studies.study import bubblemesh_version; "
              f"assert bubblemesh.__file__.startswith({str(copy)!r}); print(bubblemesh_version())")
 
@@ -548,6 +550,9 @@ def test_a_cells_key_changes_with_the_source_that_computes_it(tmp_path):
                               text=True, check=True).stdout.strip()
 
     before = version()
+    (copy / "studies" / "data").mkdir()
+    (copy / "studies" / "data" / "__init__.py").write_text('"""Case files."""\n')
+    assert version() == before
     with open(copy / "pipeline.py", "a") as f:
         f.write("# changed\n")
     after = version()

@@ -49,6 +49,8 @@ def bubblemesh_version() -> str:
         root = Path(bubblemesh.__file__).parent
         digest = hashlib.sha256()
         for path in sorted(root.rglob("*.py")):
+            if path.relative_to(root).parts[:2] == ("studies", "data"):
+                continue  # the case files, installed beside the code but not code
             digest.update(path.relative_to(root).as_posix().encode() + b"\0")
             digest.update(path.read_bytes())
         _SOURCE.append(f"{bubblemesh.__version__}+{digest.hexdigest()[:12]}")
