@@ -8,8 +8,9 @@ puts the first row at the apexes of equilateral triangles on the boundary
 edges.  :func:`frontal_seeds` does the same before §2: the apex of every
 boundary segment, on its domain side at sqrt(3)/2 of its length, kept only
 where it has room (no other node, segment midpoint or apex within
-``ROOM`` times the segment length); at corners between 84 and 150 degrees a
-seed on the bisector splits the corner in two.  Near sharper corners and in
+``ROOM`` times the segment length; of two seeds that crowd each other the
+first is kept); at corners between 84 and 150 degrees a seed on the
+bisector splits the corner in two.  Near sharper corners and in
 narrow gaps the seeds drop out and §2 fills in as in the paper.  The seeds are ordinary movable
 nodes; whether one is really inside the domain is decided exactly by a walk
 in the constrained triangulation of the boundary (:func:`inside`).
@@ -49,10 +50,10 @@ def frontal_seeds(points: np.ndarray, segments: np.ndarray,
     midpoints = 0.5 * (P[every[:, 0]] + P[every[:, 1]])
     room = ROOM * length
     keep = _clear_of(apex, room, P, S) & _clear_of(apex, room, midpoints, ids[:, None])
-    keep &= _clear_of_each_other(apex, room)
     corner, corner_rows = corner_seeds(P, S, ids, midpoints)
     if len(corner):
         keep &= _clear_of(apex, room, corner, None)
+    keep[keep] = _clear_of_each_other(apex[keep], room[keep])
     return np.concatenate([corner, apex[keep]]), np.concatenate([corner_rows, ids[keep]])
 
 
@@ -91,7 +92,7 @@ def corner_seeds(P, S, ids, midpoints):
     room = ROOM * reach
     keep = _clear_of(seeds, room, P, np.column_stack([v, w, u]))
     keep &= _clear_of(seeds, room, midpoints, np.column_stack([ids[out], ids[into]]))
-    keep &= _clear_of_each_other(seeds, room)
+    keep[keep] = _clear_of_each_other(seeds[keep], room[keep])
     return seeds[keep], ids[out[keep]]
 
 
@@ -122,7 +123,9 @@ def _clear_of(apex, room, targets, own):
 
 
 def _clear_of_each_other(apex, room):
-    """Points closer than the smaller of their two rooms both drop out."""
+    """Of points closer than the smaller of their two rooms the first is kept
+    (a greedy independent set in index order): a crowded corner or narrow
+    end still gets one seed."""
     clear = np.ones(len(apex), dtype=bool)
     if len(apex) < 2:
         return clear
@@ -130,12 +133,19 @@ def _clear_of_each_other(apex, room):
     sizes = np.fromiter((len(b) for b in balls), dtype=np.int64, count=len(apex))
     i = np.repeat(np.arange(len(apex)), sizes)
     j = np.fromiter((x for b in balls for x in b), dtype=np.int64, count=int(sizes.sum()))
-    other = i != j
-    i, j = i[other], j[other]
-    close = np.hypot(*(apex[i] - apex[j]).T) < np.minimum(room[i], room[j])
-    clear[i[close]] = False
-    clear[j[close]] = False
+    close = (i < j) & (np.hypot(*(apex[i] - apex[j]).T) < np.minimum(room[i], room[j]))
+    i, j = i[close], j[close]
+    order = np.lexsort((j, i))
+    _first_of_pairs(i[order], j[order], clear)
     return clear
+
+
+@njit(cache=True)
+def _first_of_pairs(i, j, clear):
+    """Pairs (i < j) sorted by i: j drops out when i is still in."""
+    for k in range(len(i)):
+        if clear[i[k]]:
+            clear[j[k]] = False
 
 
 def inside(points: np.ndarray, segments: np.ndarray, triangles: np.ndarray,

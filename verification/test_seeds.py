@@ -5,6 +5,8 @@ seeded §2 mesh."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import oracles as O
 from hypothesis import given
@@ -67,6 +69,44 @@ def test_seeds_are_apexes_or_corner_bisectors_with_room_inside_the_domain(loops,
         d = np.hypot(*(seeds[:, None] - seeds[None]).T)
         np.fill_diagonal(d, np.inf)
         assert d.min() >= ROOM * min(o[3] for o in owners) * (1 - 1e-12)
+
+
+@given(corner_domains(max_holes=2), st.sampled_from([0.3, 0.15]))
+def test_no_seed_is_missing_where_one_has_room(loops, size):
+    """Every apex or corner point clear of the nodes and segment midpoints that
+    is not a seed crowds one: seeds that crowd each other keep one of them."""
+    fine, _ = _refined(loops, size)
+    P, S = np.asarray(fine.points), np.asarray(fine.segments)
+    seeds, _ = frontal_seeds(P, S, fine.interior)
+    owners = _owners(P, S)
+    lengths = np.array([next(L for y, _, _, L in owners if np.allclose(y, x, rtol=0, atol=1e-12))
+                        for x in seeds])
+    mids = 0.5 * (P[S[:, 0]] + P[S[:, 1]])
+    for x, nodes, segs, length in owners:
+        room = ROOM * length
+        if (np.hypot(*(np.delete(P, nodes, axis=0) - x).T).min() < room
+                or np.hypot(*(np.delete(mids, segs, axis=0) - x).T).min() < room
+                or O.domain_location(P, fine.loops, tuple(x)) <= 0):
+            continue
+        d = np.hypot(*(seeds - x).T) if len(seeds) else np.zeros(0)
+        assert (d < ROOM * np.maximum(length, lengths)).any(), ("no seed near", x)
+
+
+def test_a_truncated_tip_gets_one_seed():
+    """Two 110 degree corners at the ends of a short segment, as at the top of
+    Triangle's A.poly: their seeds crowd each other, one is kept, so the tip is
+    not a single blunt triangle (radius ratio 0.6)."""
+    tip = np.array([(0, -1), (0.35, -1), (0.008, 0), (-0.008, 0), (-0.35, -1)], float)
+    domain = bm.Domain.from_loops([tip])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", bm.QualityWarning)
+        m = bm.mesh(domain, max_area=domain.area / 200)
+    corners = [int(np.nonzero((m.points == c).all(axis=1))[0][0]) for c in tip[2:4]]
+    shared = [t for t in np.asarray(m.triangles).tolist() if set(corners) <= set(t)]
+    assert len(shared) == 1
+    apex = (set(shared[0]) - set(corners)).pop()
+    assert apex >= m.n_boundary  # an interior node, not the next wall node
+    assert O.radius_ratio_reference(m.points, m.triangles).min() >= 0.7
 
 
 def test_a_hexagon_gets_a_seed_on_each_corner_bisector():
