@@ -8,10 +8,7 @@ mesher should aim for, the minimum of
 
 (a) the input spacing: at a boundary node, the edge length of the equilateral
     triangle whose area is eq. 1's A_n, h = sqrt((l1^2 + l2^2) / 2) (the
-    eq. 2 radius is r_n = h sqrt(sqrt(3) / (4 pi)), see :meth:`SizeField.radius`),
-    and at a segment's midpoint its length (from the nodes alone h would grow
-    by g / 2 times the spacing between them, so the first row off a wall
-    would be taller than the wall's edges);
+    eq. 2 radius is r_n = h sqrt(sqrt(3) / (4 pi)), see :meth:`SizeField.radius`);
 (b) the local feature size: the distance from a boundary point to the nearest
     boundary segment that does not share a node with the point's own segment
     (at a node: with either of its two segments), so narrow gaps and thin slots
@@ -20,8 +17,7 @@ mesher should aim for, the minimum of
 
 limited in gradation: h(x) = min(cap, min_k h_k + g |x - x_k|) over sources
 (x_k, h_k), so |grad h| <= g everywhere and h(x) <= h_k + g |x - x_k| holds for
-every source by construction.  Sources are the boundary nodes, the segments'
-midpoints, adaptive samples
+every source by construction.  Sources are the boundary nodes, adaptive samples
 along the segments (placed so that h <= ``FEATURE_SLACK`` times (b) all along
 the boundary, and spaced at most ``SAMPLING`` times a callable (c)) and, for a
 callable, the centres of a quadtree whose cells are at most
@@ -504,7 +500,6 @@ class SizeField:
         user = None if size is None else as_size_function(size)
         boundary = _Boundary(domain)
         points, values = _node_sources(domain, boundary, user, cap)
-        points, values = _with_midpoints(points, values, boundary, user, cap)
         nodes = cls(points, values, gradation=g, cap=cap)
         extra_p, extra_v = _segment_sources(boundary, nodes, user, max_sources)
         points, values = np.vstack([points, extra_p]), np.concatenate([values, extra_v])
@@ -545,16 +540,6 @@ def _node_sources(domain, boundary, user, cap):
     if user is not None:
         values = np.minimum(values, user(domain.points))
     return np.array(domain.points), np.minimum(values, cap)
-
-
-def _with_midpoints(points, values, boundary, user, cap):
-    """The node sources and every segment's midpoint with its length (a):
-    the nodes alone let h grow by g / 2 times the spacing between them."""
-    xy = 0.5 * (boundary.a + boundary.b)
-    mid = np.minimum(boundary.length, cap)
-    if user is not None:
-        mid = np.minimum(mid, user(xy))
-    return np.vstack([points, xy]), np.concatenate([values, mid])
 
 
 def _segment_sources(boundary, nodes, user, max_sources):
