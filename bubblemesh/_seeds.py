@@ -25,7 +25,7 @@ from scipy.spatial import cKDTree
 from ._inside import walk_inside
 from .predicates import orient2d
 
-ROOM = 0.7
+ROOM = 0.75
 CORNER_LOW, CORNER_HIGH = np.radians(84.0), np.radians(150.0)  # two triangles beat one from 81.4
 
 __all__ = ["frontal_seeds", "inside"]
