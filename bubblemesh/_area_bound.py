@@ -19,10 +19,8 @@ exceeds its bound (each round splits the worst triangle at least, so the
 largest area shrinks), at most :data:`MAX_ROUNDS` times.
 
 A size field that aims at ``FILL`` times the bound (``Domain.region_size``
-does) leaves few triangles over it: on an 8 x 8 square with a hole and
-max_area 0.01, 91 of 8388 triangles against 2566 of 6386 when aiming at the
-bound itself, and the smallest radius ratio stays 0.826 instead of falling
-to 0.48.
+does) leaves few triangles over it, and the insertions, which leave poor
+stars behind, stay few (docs/performance.md has the measurements).
 
 Areas are compared with a relative margin of :data:`MARGIN`, so a triangle
 whose floating-point area passes is below its bound exactly.  Paper mode
@@ -52,7 +50,7 @@ SQRT3 = 3.0**0.5
 CLOSE = 0.5  # a circumcentre nearer a node than this times the circumradius is refused
 POLISH_CYCLES, SMOOTH_SWEEPS, POOR = 3, 4, 0.85  # smoothing after the insertions
 # A size field aiming at this fraction of an area bound leaves few triangles over it
-FILL = 0.65
+FILL = 0.6
 
 
 @njit(cache=True)

@@ -110,7 +110,7 @@ class Domain:
     def region_size(self, default: float | None = None):
         """The regions' max_area as a size for ``bubblemesh.mesh(domain,
         size=domain.region_size())``: a vectorised h(xy), the side of the
-        equilateral triangle of ``FILL`` (0.65) times the max_area of the region
+        equilateral triangle of ``FILL`` (0.6) times the max_area of the region
         holding each point (a later region point wins, as in Triangle), so that
         few triangles exceed the bound that ``bubblemesh.mesh`` then enforces
         (:mod:`bubblemesh._area_bound`); ``default`` (the domain's diameter)
