@@ -7,13 +7,13 @@ not move it into the pocket.  A frontal mesher (Gmsh's Frontal-Delaunay)
 puts the first row at the apexes of equilateral triangles on the boundary
 edges.  :func:`frontal_seeds` does the same before §2: the apex of every
 boundary segment, on its domain side at sqrt(3)/2 of its length, kept only
-where it has room (no other node, segment midpoint or apex within
-``ROOM`` times the segment length; of two seeds that crowd each other the
-first is kept); at corners between 84 and 150 degrees a seed on the
-bisector splits the corner in two.  Near sharper corners and in
-narrow gaps the seeds drop out and §2 fills in as in the paper.  The seeds are ordinary movable
-nodes; whether one is really inside the domain is decided exactly by a walk
-in the constrained triangulation of the boundary (:func:`inside`).
+where it has room (no other node, segment midpoint or apex within ``ROOM``
+times the segment length; of two seeds that crowd each other the first is
+kept); at corners between 84 and 150 degrees a seed on the bisector splits
+the corner in two.  Near sharper corners and in narrow gaps the seeds drop
+out and §2 fills in as in the paper.  The seeds are ordinary movable nodes;
+whether one is really inside the domain is decided exactly by a walk in the
+constrained triangulation of the boundary (:func:`inside`).
 """
 
 from __future__ import annotations

@@ -95,7 +95,7 @@ def test_no_seed_is_missing_where_one_has_room(loops, size):
 def test_a_truncated_tip_gets_one_seed():
     """Two 110 degree corners at the ends of a short segment, as at the top of
     Triangle's A.poly: their seeds crowd each other, one is kept, so the tip is
-    not a single blunt triangle (radius ratio 0.6)."""
+    not one blunt triangle (radius ratio about 0.6)."""
     tip = np.array([(0, -1), (0.35, -1), (0.008, 0), (-0.008, 0), (-0.35, -1)], float)
     domain = bm.Domain.from_loops([tip])
     with warnings.catch_warnings():
