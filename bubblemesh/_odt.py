@@ -204,6 +204,13 @@ def _compass(X, i, buf, deg, step, halvings, need, mean):
 def _mean_visit(X, triangles, ptr, idx, i, buf, floor, halvings, below, steps):
     """One :func:`mean_polish` visit of node i: the moves taken."""
     deg = gather_star(X, triangles, ptr, idx, i, buf)
+    return polish_gathered(X, i, buf, deg, floor, halvings, below, steps)
+
+
+@njit(cache=True)
+def polish_gathered(X, i, buf, deg, floor, halvings, below, steps):
+    """:func:`_mean_visit` on node i's star gathered into buf (deg rows, as
+    :func:`gather_star` lays them out): the moves taken."""
     worst, mean = gathered_stats(buf, deg, X[i, 0], X[i, 1])
     if mean >= below:
         return 0

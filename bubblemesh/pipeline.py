@@ -20,7 +20,11 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    (:mod:`bubblemesh._smoothing`) alternating with re-triangulation; then
    settling: size-weighted ODT alternating with re-triangulation, valence and
    quality edge flips, corner splits, gradient steps on each star's mean radius
-   ratio (a compass search where they are blocked).
+   ratio (a compass search where they are blocked).  Last (after the area
+   bound's insertions, if any), edge flips judged after relaxing the nodes
+   around them (:mod:`bubblemesh._relaxed_flips`: they move valence defects
+   a single flip cannot pay for) and the compass search on the stars they
+   left below RELAXED_REPAIR.
    After the flips the mesh is valid and conforming (every segment an edge,
    boundary nodes unmoved) but in general no longer constrained-Delaunay.  Final
    guarantee: the result's smallest radius ratio is never below the §2
@@ -40,7 +44,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ._area_bound import FILL, bound_areas
+from ._area_bound import FILL, bound_areas, triangle_limits
+from ._area_bound import MARGIN as AREA_MARGIN
 from ._coincident import shared_positions
 from ._corners import split_corners
 from ._flips import (
@@ -57,6 +62,7 @@ from ._inside import boundary_clearance
 from ._lattice import lattice_points
 from ._mesh import GenerationStats, Mesh, OptimizationStats
 from ._odt import mean_polish, odt_smooth
+from ._relaxed_flips import relaxed_flips
 from ._rings import node_adjacency, ring_neighbors, vertex_triangles
 from ._seeds import frontal_seeds, inside
 from ._smoothing import compass_polish, guarded_smooth, stars, triangle_quality
@@ -65,6 +71,7 @@ from ._verlet import VerletLists
 from .domain import Domain
 from .errors import GeometryError, MeshingError
 from .generation import generate_sized, refuse_beyond_memory
+from .quality import radius_ratio
 from .refinement import refine_boundary
 from .sizing import _EQUILATERAL_RADIUS, SizeField, as_size_function
 from .timing import PhaseClock
@@ -99,6 +106,9 @@ MAX_SCALE = 1e12  # largest domain extent over the smallest size that bm.mesh ta
 MEAN_SWEEPS, MEAN_HALVINGS = 3, 4
 MEAN_BELOW = {"centroid": 1.0, "frontal": 0.999}  # stars polished for their mean (1.0: all)
 MEAN_STEPS = 3  # gradient steps per star visit before any compass search
+RELAXED_PASSES, RELAXED_SWEEPS = 8, 3  # flips judged after relaxing (_relaxed_flips)
+RELAXED_KEEP = 0.8  # they may lower a triangle's ratio to min(its value, this)
+RELAXED_REPAIR, REPAIR_ROUNDS = 0.85, 3  # then the compass search on stars below this
 UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
 FRONTAL_ELEMENTS = 1000  # frontal insertion from this many elements of the cap size up
 ITERATIONS = {"centroid": 200, "frontal": 30}  # §3 force iterations by default
@@ -288,7 +298,7 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
                            mean_below=MEAN_BELOW[gen.insertion])[:2]
 
         # Triangle's -a, global and regional: hard bounds
-        return bound_areas(mesh, max_area, settle=settle)
+        return _relaxed(bound_areas(mesh, max_area, settle=settle), max_area)
     except MemoryError:  # sizes far finer than the domain's extent
         raise MeshingError("mesh: not enough memory to optimise the mesh this size field "
                            "asks for (sizes far finer than the domain)") from None
@@ -612,6 +622,47 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
     return Mesh(points=X, triangles=triangles, neighbors=neighbors, radii=R, segments=segments,
                 n_boundary=n_b, domain=mesh.domain, generation=mesh.generation,
                 optimization=stats)
+
+
+def _relaxed(mesh, max_area):
+    """The last step: edge flips judged after relaxing the nodes around them
+    (:mod:`bubblemesh._relaxed_flips`), within the area bounds (every changed
+    triangle at most its bound, as :func:`bound_areas` leaves them) and never
+    below the §2 mesh's smallest radius ratio; then the compass search on the
+    stars they left below RELAXED_REPAIR, kept if it breaks no area bound."""
+    if not RELAXED_PASSES:
+        return mesh
+    X, T = np.array(mesh.points), np.array(mesh.triangles)
+    N, segments = np.array(mesh.neighbors), np.asarray(mesh.segments)
+    movable = np.arange(len(X)) >= mesh.n_boundary
+    movable[np.unique(segments)] = False
+    limit = triangle_limits(X, T, N, getattr(mesh.domain, "regions", None),
+                            max_area) / (1.0 + AREA_MARGIN)
+    stats = mesh.optimization
+    keep = max(RELAXED_KEEP, getattr(stats, "min_ratio_generation", 0.0))
+    flips = relaxed_flips(X, T, N, segment_keys(segments, len(X)), movable,
+                          ideal_counts(X, T, len(X)), limit, keep, RELAXED_PASSES,
+                          RELAXED_SWEEPS, MEAN_HALVINGS, MEAN_STEPS)
+    if not flips:
+        return mesh
+    relaxed = X.copy()
+    ptr, idx = stars(T, len(X))
+    repaired = 0
+    for _ in range(REPAIR_ROUNDS):
+        taken = compass_polish(X, T, ptr, idx, mesh.n_boundary, RELAXED_REPAIR, movable)
+        repaired += taken
+        if not taken:
+            break
+    if repaired and (_triangle_areas(X, T) > limit).any():
+        X = relaxed
+    stats = replace(stats, flips=stats.flips + flips,
+                    min_ratio=float(radius_ratio(X, T).min(initial=1.0)))
+    return replace(mesh, points=X, triangles=T, neighbors=N, optimization=stats)
+
+
+def _triangle_areas(X, T):
+    u, v = X[T[:, 1]] - X[T[:, 0]], X[T[:, 2]] - X[T[:, 0]]
+    return 0.5 * (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])
 
 
 def _insertion(mesh):
