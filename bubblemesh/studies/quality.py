@@ -269,9 +269,10 @@ GMSH_SMOOTHING = 10
 
 def run_gmsh(mesh, field, count, algorithm=6):
     """Gmsh (Frontal-Delaunay by default, GMSH_SMOOTHING smoothing steps) on
-    bm's refined boundary nodes, no further boundary splits, sizes from bm's size field (a Python callback)
-    times a factor tuned until the element count is within 3% of count (else
-    the closest of 12 runs).  Returns (points, triangles, seconds of that run)."""
+    bm's refined boundary nodes, no further boundary splits, sizes from bm's
+    size field (a Python callback) times a factor tuned until the element
+    count is within 3% of count (else the closest of 12 runs).  Returns
+    (points, triangles, seconds of that run)."""
     return _tuned(count, lambda scale: _gmsh_once(mesh, field, scale, algorithm))
 
 
