@@ -58,7 +58,8 @@ def mesh(domain: Domain, *, size: Any = None, max_area: Any = None, gradation: f
     combined with ``size`` by min); ``gradation``: the size field's largest
     slope.  Without either, the sizes follow the input spacing and feature
     size.  ``options`` go to :func:`bubblemesh.pipeline.robust_mesh`
-    (``max_iterations``, ``tol``, ``amplification``, ``alpha``, ``momentum``,
+    (``insertion``: "auto", "frontal" or "centroid", §2's insertion order;
+    ``max_iterations``, ``tol``, ``amplification``, ``alpha``, ``momentum``,
     ``rings``, ``smoothing_rounds``, ``smoothing_sweeps``).  Input nodes keep their
     coordinates bit for bit and come first, loop after loop (the outer loop
     counter-clockwise), with the nodes added on their segments between them.

@@ -261,9 +261,10 @@ def _clearly_fine(triangles, ptr, idx, i, q, touched, poor):
 
 
 @njit(cache=True)
-def compass_polish(X, triangles, ptr, idx, n_boundary, poor, movable):
+def compass_polish(X, triangles, ptr, idx, n_boundary, poor, movable, cap=2.0):
     """Compass search on the interior nodes with ``movable`` set whose star's
-    smallest ratio is below ``poor`` (module docstring); X in place.  Most
+    smallest ratio is below ``poor`` (module docstring), each star's search
+    ended once that ratio reaches ``cap``; X in place.  Most
     stars are well above it: their triangles' ratios, computed once for the
     pass, pass them over while none of their nodes has moved in it.  Returns
     the number of steps taken."""
@@ -297,7 +298,11 @@ def compass_polish(X, triangles, ptr, idx, n_boundary, poor, movable):
                         taken += 1
                         touched[i] = True
                         break
+                if best >= cap:
+                    break
                 if taken > 64 * (X.shape[0] - n_boundary):  # bounded whatever happens
                     return taken
+            if best >= cap:
+                break
             step *= 0.5
     return taken

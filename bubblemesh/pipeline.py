@@ -30,7 +30,12 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    guarantee: the result's smallest radius ratio is never below the §2
    mesh's; if it were, the nodes of the offending triangles go back to their
    §2 positions, and as a last resort the §2 mesh itself is smoothed.
-4. Corners sharper than :data:`SHARP_ANGLE` (where no triangle can reach a
+4. With ``insertion="auto"`` a domain that takes centroid insertion and
+   gives at most BOTH_BELOW elements is meshed by frontal insertion too, and
+   the frontal mesh is returned if it is better by :func:`_better` (a higher
+   mean, no lower minimum, no more elements below 0.7, a count within
+   BOTH_COUNT): on small domains either can win by where its seams fall.
+5. Corners sharper than :data:`SHARP_ANGLE` (where no triangle can reach a
    radius ratio of 0.7) are reported: a :class:`QualityWarning` and the
    ``warnings`` field of the returned mesh's generation record.
 """
@@ -109,6 +114,8 @@ MEAN_STEPS = 3  # gradient steps per star visit before any compass search
 RELAXED_PASSES, RELAXED_SWEEPS = 8, 3  # flips judged after relaxing (_relaxed_flips)
 RELAXED_KEEP = 0.8  # they may lower a triangle's ratio to min(its value, this)
 RELAXED_REPAIR, REPAIR_ROUNDS = 0.85, 3  # then the compass search on stars below this
+REPAIR_CAP = 0.85
+BOTH_BELOW, BOTH_COUNT = 5000, 0.03  # both insertions up to this many elements (auto)
 UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
 FRONTAL_ELEMENTS = 1000  # frontal insertion from this many elements of the cap size up
 ITERATIONS = {"centroid": 200, "frontal": 30}  # §3 force iterations by default
@@ -263,16 +270,41 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
     except (TypeError, ValueError) as error:
         raise type(error)(f"mesh: {error}") from None
     clock.lap("sizing")
+    notes = _sharp_corner_warnings(domain)
+    for note in notes:
+        warnings.warn(note, QualityWarning, stacklevel=3)
     frontal = _frontal_wanted(insertion, domain, field)
+    options = dict(max_iterations=max_iterations, tol=float(tol),
+                   amplification=float(amplification), alpha=float(alpha),
+                   momentum=float(momentum), rings=int(rings),
+                   smoothing_rounds=int(smoothing_rounds),
+                   smoothing_sweeps=int(smoothing_sweeps))
+    mesh = _mesh_with(domain, fine, field, frontal, notes, max_area, progress, clock, options)
+    if insertion == "auto" and not frontal and len(mesh.triangles) <= BOTH_BELOW:
+        other = _mesh_with(domain, fine, field, True, notes, max_area, progress, clock, options)
+        if _better(other, mesh):
+            return other
+    return mesh
+
+
+def _better(a, b):
+    """Is mesh a better than b: a higher mean radius ratio (eq. 10), no lower
+    minimum, no more triangles below 0.7, and within BOTH_COUNT of b's count
+    (quality is not bought with elements)?"""
+    qa, qb = a.quality(), b.quality()
+    return bool(abs(len(qa) / len(qb) - 1.0) <= BOTH_COUNT and qa.mean() > qb.mean()
+                and qa.min() >= qb.min() and (qa < 0.7).sum() <= (qb < 0.7).sum())
+
+
+def _mesh_with(domain, fine, field, frontal, notes, max_area, progress, clock, options):
+    """§2 by frontal or centroid insertion on the refined domain ``fine``, then
+    the stable §3, the area bounds and the relaxed flips (module docstring)."""
     seeds = _lattice(fine, field) if frontal else _frontal_seeds(fine)
     try:
         generated = generate_sized(fine, field, progress=progress, seeds=seeds, frontal=frontal)
     except MemoryError:  # sizes far finer than the domain's extent
         raise MeshingError("mesh: not enough memory for the mesh this size field asks for "
                            "(sizes far finer than the domain)") from None
-    notes = _sharp_corner_warnings(domain)
-    for note in notes:
-        warnings.warn(note, QualityWarning, stacklevel=3)
     gen = RobustGenerationStats(
         **{k: getattr(generated.generation, k) for k in GenerationStats.__dataclass_fields__},
         warnings=notes, input_boundary_nodes=len(domain.points),
@@ -282,16 +314,13 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
     generated = replace(generated, generation=gen)
     if frontal:
         generated = _first_row_first(generated)
-    if max_iterations is None:
-        max_iterations = ITERATIONS[gen.insertion]
+    options = dict(options)
+    if options["max_iterations"] is None:
+        options["max_iterations"] = ITERATIONS[gen.insertion]
+    options["max_iterations"] = int(options["max_iterations"])
     clock.lap("generation")
     try:
-        mesh = stable_optimize(generated, max_iterations=int(max_iterations), tol=float(tol),
-                               amplification=float(amplification), alpha=float(alpha),
-                               momentum=float(momentum), rings=int(rings),
-                               smoothing_rounds=int(smoothing_rounds),
-                               smoothing_sweeps=int(smoothing_sweeps), size_field=field,
-                               clock=clock)
+        mesh = stable_optimize(generated, size_field=field, clock=clock, **options)
 
         def settle(X, T, N, segments, n_b, movable):
             return _settle(X, T, N, segments, n_b, _node_sizes(mesh, X, field), movable,
@@ -323,7 +352,8 @@ def _frontal_wanted(insertion, domain, field):
     meet in a few seams, the lattice §3 can only approach from centroid
     insertions; but every seam and corner costs a little, and in small domains,
     or where the field grows all the way (no cap), the centroids relaxed by
-    §3's bubble forces do better (docs/performance.md has the measurements)."""
+    §3's bubble forces mostly do better (docs/performance.md has the
+    measurements; :func:`robust_mesh` tries both on small domains)."""
     if insertion != "auto":
         return insertion == "frontal"
     cap = float(field.cap)
@@ -649,7 +679,8 @@ def _relaxed(mesh, max_area):
     ptr, idx = stars(T, len(X))
     repaired = 0
     for _ in range(REPAIR_ROUNDS):
-        taken = compass_polish(X, T, ptr, idx, mesh.n_boundary, RELAXED_REPAIR, movable)
+        taken = compass_polish(X, T, ptr, idx, mesh.n_boundary, RELAXED_REPAIR, movable,
+                               REPAIR_CAP)
         repaired += taken
         if not taken:
             break

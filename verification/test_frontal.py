@@ -225,7 +225,10 @@ def test_auto_insertion_is_frontal_for_a_large_capped_field():
 def test_mesh_records_its_insertion():
     square = bm.Domain.from_loops([[(0, 0), (1, 0), (1, 1), (0, 1)]])
     assert bm.mesh(square, size=0.02).generation.insertion == "frontal"
-    assert bm.mesh(square, size=0.1).generation.insertion == "centroid"
+    assert bm.mesh(square, size=0.1, insertion="centroid").generation.insertion == "centroid"
+    small = bm.mesh(square, size=0.1)  # both tried: the record names the one returned
+    again = bm.mesh(square, size=0.1, insertion=small.generation.insertion)
+    assert np.array_equal(small.points, again.points)
 
 
 @given(corner_domains(max_holes=2))

@@ -229,6 +229,50 @@ def test_guarded_smoothing_never_lowers_the_minimum_nor_inverts(loops, seed):
     np.testing.assert_array_equal(X[: m.n_boundary], np.asarray(m.points)[: m.n_boundary])
 
 
+@given(corner_domains(max_holes=1), st.integers(0, 2**32 - 1))
+def test_a_capped_compass_search_stops_each_star_at_its_cap(loops, seed):
+    """With the cap at 0 every star below ``poor`` stops after its first step;
+    with the cap at 1 (never reached) the same stars take more, from the same
+    start, and reach a minimum at least as high."""
+    from bubblemesh._smoothing import compass_polish, stars
+
+    domain = bm.Domain.from_loops(loops)
+    field = SizeField.from_domain(domain, size=0.2)
+    m = generate_sized(refine_boundary(domain, field).to_domain(), field)
+    tri = np.array(m.triangles)
+    ptr, idx = stars(tri, len(m.points))
+    movable = np.arange(len(m.points)) >= m.n_boundary
+    q = O.radius_ratio_reference(np.asarray(m.points), tri)
+    poor_stars = len(np.unique(tri[q < 0.9]))
+    steps = {}
+    for cap in (0.0, 1.0):
+        X = np.array(m.points)
+        steps[cap] = compass_polish(X, tri, ptr, idx, m.n_boundary, 0.9, movable, cap)
+        O.check_valid(X, tri)
+    assert steps[0.0] <= poor_stars
+    assert steps[1.0] >= steps[0.0]
+
+
+def test_small_domains_get_the_better_of_both_insertions():
+    """bm.mesh with insertion="auto" on a small domain is, bit for bit, its
+    centroid-insertion mesh or its frontal one, and the frontal one only with
+    a higher mean, no lower minimum and a count within 3% (radius ratios from
+    the reference formulas)."""
+    t = np.linspace(0, np.pi, 33)  # a half-disk where the frontal mesh wins
+    d = bm.Domain.from_loops([np.column_stack([np.cos(t), np.sin(t)])])
+    auto = bm.mesh(d, max_area=d.area / 200)
+    runs = {k: bm.mesh(d, max_area=d.area / 200, insertion=k) for k in ("centroid", "frontal")}
+    same = [k for k, m in runs.items() if np.array_equal(m.points, auto.points)
+            and np.array_equal(m.triangles, auto.triangles)]
+    assert len(same) == 1
+    q = {k: O.radius_ratio_reference(np.asarray(m.points), np.asarray(m.triangles))
+         for k, m in runs.items()}
+    better = (q["frontal"].mean() > q["centroid"].mean()
+              and q["frontal"].min() >= q["centroid"].min()
+              and abs(len(q["frontal"]) / len(q["centroid"]) - 1) <= 0.03)
+    assert same == (["frontal"] if better else ["centroid"])
+
+
 def test_segments_ulps_apart_do_not_ask_for_a_zero_size():
     """A fuzz case (seed 236, ulp-jittered): a hole node a few ulps from the
     outer loop made the feature size 0 and the size field refuse its own
