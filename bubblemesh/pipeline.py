@@ -23,8 +23,8 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    ratio (a compass search where they are blocked).  Last (after the area
    bound's insertions, if any), edge flips judged after relaxing the nodes
    around them (:mod:`bubblemesh._relaxed_flips`: they move valence defects
-   a single flip cannot pay for) and the compass search on the stars they
-   left below RELAXED_REPAIR.
+   a single flip cannot pay for) and the compass search, up to the mesh's
+   minimum before them, on the stars they left below it.
    After the flips the mesh is valid and conforming (every segment an edge,
    boundary nodes unmoved) but in general no longer constrained-Delaunay.  Final
    guarantee: the result's smallest radius ratio is never below the §2
@@ -113,8 +113,7 @@ MEAN_BELOW = {"centroid": 1.0, "frontal": 0.999}  # stars polished for their mea
 MEAN_STEPS = 3  # gradient steps per star visit before any compass search
 RELAXED_PASSES, RELAXED_SWEEPS = 8, 3  # flips judged after relaxing (_relaxed_flips)
 RELAXED_KEEP = 0.8  # they may lower a triangle's ratio to min(its value, this)
-RELAXED_REPAIR, REPAIR_ROUNDS = 0.85, 3  # then the compass search on stars below this
-REPAIR_CAP = 0.85
+REPAIR_ROUNDS = 3  # compass passes on the stars the relaxed flips left below the minimum
 BOTH_BELOW, BOTH_COUNT = 5000, 0.03  # both insertions up to this many elements (auto)
 UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
 FRONTAL_ELEMENTS = 1000  # frontal insertion from this many elements of the cap size up
@@ -659,7 +658,9 @@ def _relaxed(mesh, max_area):
     (:mod:`bubblemesh._relaxed_flips`), within the area bounds (every changed
     triangle at most its bound, as :func:`bound_areas` leaves them) and never
     below the §2 mesh's smallest radius ratio; then the compass search on the
-    stars they left below RELAXED_REPAIR, kept if it breaks no area bound."""
+    stars they left below the mesh's minimum before them, each up to that
+    minimum (so the result's minimum follows what the earlier steps
+    reached), kept if it breaks no area bound."""
     if not RELAXED_PASSES:
         return mesh
     X, T = np.array(mesh.points), np.array(mesh.triangles)
@@ -669,6 +670,7 @@ def _relaxed(mesh, max_area):
     limit = triangle_limits(X, T, N, getattr(mesh.domain, "regions", None),
                             max_area) / (1.0 + AREA_MARGIN)
     stats = mesh.optimization
+    before = float(triangle_quality(X, T).min(initial=1.0))
     keep = max(RELAXED_KEEP, getattr(stats, "min_ratio_generation", 0.0))
     flips = relaxed_flips(X, T, N, segment_keys(segments, len(X)), movable,
                           ideal_counts(X, T, len(X)), limit, keep, RELAXED_PASSES,
@@ -679,8 +681,7 @@ def _relaxed(mesh, max_area):
     ptr, idx = stars(T, len(X))
     repaired = 0
     for _ in range(REPAIR_ROUNDS):
-        taken = compass_polish(X, T, ptr, idx, mesh.n_boundary, RELAXED_REPAIR, movable,
-                               REPAIR_CAP)
+        taken = compass_polish(X, T, ptr, idx, mesh.n_boundary, before, movable, before)
         repaired += taken
         if not taken:
             break
