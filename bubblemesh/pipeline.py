@@ -31,10 +31,14 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    mesh's; if it were, the nodes of the offending triangles go back to their
    §2 positions, and as a last resort the §2 mesh itself is smoothed.
 4. With ``insertion="auto"`` a domain that takes centroid insertion and
-   gives at most BOTH_BELOW elements is meshed by frontal insertion too, and
-   the frontal mesh is returned if it is better by :func:`_better` (a higher
-   mean, no lower minimum, no more elements below 0.7, a count within
-   BOTH_COUNT): on small domains either can win by where its seams fall.
+   gives at most BOTH_BELOW elements is meshed twice more, by frontal
+   insertion and by centroid insertion without the frontal seeds, and the
+   best of the three returned (:func:`_better`: fewest elements below 0.7,
+   then a count within COUNT_TOL of the size field's
+   (:func:`~bubblemesh.sizing.field_count`), then a higher mean with no lower
+   minimum): on small domains either insertion can win by where its seams
+   fall, and where walls dominate the seeds' first row can overshoot the
+   field's count.
 5. Corners sharper than :data:`SHARP_ANGLE` (where no triangle can reach a
    radius ratio of 0.7) are reported: a :class:`QualityWarning` and the
    ``warnings`` field of the returned mesh's generation record.
@@ -78,7 +82,7 @@ from .errors import GeometryError, MeshingError
 from .generation import generate_sized, refuse_beyond_memory
 from .quality import radius_ratio
 from .refinement import refine_boundary
-from .sizing import _EQUILATERAL_RADIUS, SizeField, as_size_function
+from .sizing import _EQUILATERAL_RADIUS, SizeField, as_size_function, field_count
 from .timing import PhaseClock
 from .triangulation import constrained_delaunay
 
@@ -115,6 +119,7 @@ RELAXED_PASSES, RELAXED_SWEEPS = 8, 3  # flips judged after relaxing (_relaxed_f
 RELAXED_KEEP = 0.8  # they may lower a triangle's ratio to min(its value, this)
 REPAIR_ROUNDS = 3  # compass passes on the stars the relaxed flips left below the minimum
 BOTH_BELOW, BOTH_COUNT = 5000, 0.03  # both insertions up to this many elements (auto)
+COUNT_TOL = 0.05  # a count this close to the size field's fits it
 UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
 FRONTAL_ELEMENTS = 1000  # frontal insertion from this many elements of the cap size up
 ITERATIONS = {"centroid": 200, "frontal": 30}  # §3 force iterations by default
@@ -278,27 +283,41 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
                    momentum=float(momentum), rings=int(rings),
                    smoothing_rounds=int(smoothing_rounds),
                    smoothing_sweeps=int(smoothing_sweeps))
-    mesh = _mesh_with(domain, fine, field, frontal, notes, max_area, progress, clock, options)
+    mesh = _mesh_with(domain, fine, field, frontal, True, notes, max_area, progress, clock,
+                      options)
     if insertion == "auto" and not frontal and len(mesh.triangles) <= BOTH_BELOW:
-        other = _mesh_with(domain, fine, field, True, notes, max_area, progress, clock, options)
-        if _better(other, mesh):
-            return other
+        asked = field_count(field, mesh.points, mesh.triangles)
+        for other_frontal, seeded in ((True, True), (False, False)):
+            other = _mesh_with(domain, fine, field, other_frontal, seeded, notes, max_area,
+                               progress, clock, options)
+            if _better(other, mesh, asked):
+                mesh = other
     return mesh
 
 
-def _better(a, b):
-    """Is mesh a better than b: a higher mean radius ratio (eq. 10), no lower
-    minimum, no more triangles below 0.7, and within BOTH_COUNT of b's count
-    (quality is not bought with elements)?"""
+def _better(a, b, asked):
+    """Is mesh a better than b: fewer triangles below a radius ratio (eq. 10)
+    of 0.7; or as many, and a's count within COUNT_TOL of ``asked`` (the
+    field's) where b's is not; or both or neither within it, a higher mean
+    ratio, no lower minimum and a count within BOTH_COUNT of b's (quality is
+    not bought with elements)?"""
     qa, qb = a.quality(), b.quality()
+    poor_a, poor_b = int((qa < 0.7).sum()), int((qb < 0.7).sum())
+    if poor_a != poor_b:
+        return poor_a < poor_b
+    fits_a, fits_b = (abs(len(q) / asked - 1.0) <= COUNT_TOL for q in (qa, qb))
+    if fits_a != fits_b:
+        return fits_a
     return bool(abs(len(qa) / len(qb) - 1.0) <= BOTH_COUNT and qa.mean() > qb.mean()
-                and qa.min() >= qb.min() and (qa < 0.7).sum() <= (qb < 0.7).sum())
+                and qa.min() >= qb.min())
 
 
-def _mesh_with(domain, fine, field, frontal, notes, max_area, progress, clock, options):
-    """§2 by frontal or centroid insertion on the refined domain ``fine``, then
-    the stable §3, the area bounds and the relaxed flips (module docstring)."""
-    seeds = _lattice(fine, field) if frontal else _frontal_seeds(fine)
+def _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, clock,
+               options):
+    """§2 by frontal or centroid insertion on the refined domain ``fine`` (with
+    ``seeded`` its frontal seeds or lattice), then the stable §3, the area
+    bounds and the relaxed flips (module docstring)."""
+    seeds = None if not seeded else _lattice(fine, field) if frontal else _frontal_seeds(fine)
     try:
         generated = generate_sized(fine, field, progress=progress, seeds=seeds, frontal=frontal)
     except MemoryError:  # sizes far finer than the domain's extent

@@ -42,7 +42,7 @@ from numba import njit, prange
 from bubblemesh.domain import Domain
 from bubblemesh.errors import MeshingError
 
-__all__ = ["SizeField", "as_size_function", "cone_at", "field_at", "STACK_SIZE"]
+__all__ = ["SizeField", "as_size_function", "cone_at", "field_at", "field_count", "STACK_SIZE"]
 
 SAMPLING = 0.5  # boundary samples are spaced <= SAMPLING * h
 FEATURE_SLACK = 1.25  # on the boundary h <= FEATURE_SLACK * feature size
@@ -629,3 +629,17 @@ def _quadtree_sources(domain, field, user, room):
         centres = (c[:, None, :] + quarter[None, :, :] * s[:, None, None]).reshape(-1, 2)
         sides = np.repeat(0.5 * s, 4)
     return np.vstack(kept_p), np.concatenate(kept_v)
+
+
+def field_count(size, points, triangles) -> float:
+    """The elements a size field asks for over a triangulated region: the sum
+    over its triangles of area * 4 / (sqrt(3) h(centroid)^2), the equilateral
+    triangles of side h that fit (a midpoint rule on the mesh itself; the
+    quality study's ``predicted_count`` integrates to a tolerance instead).
+    ``size`` maps (n, 2) points to (n,) sizes."""
+    P = np.asarray(points, dtype=np.float64)
+    T = np.asarray(triangles)
+    u, v = P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]]
+    area = 0.5 * np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])
+    h = np.asarray(size(np.ascontiguousarray(P[T].mean(axis=1))), dtype=np.float64)
+    return float(np.sum(area * 4.0 / (math.sqrt(3.0) * h * h)))

@@ -46,12 +46,18 @@ def region_of_centroids(mesh, boxes):
 
 @pytest.fixture
 def seen(monkeypatch):
-    """{insertion: the mesh bound_areas got} for the next bm.mesh call (on small
-    domains it meshes by both insertions and returns one: look up its own)."""
-    seen = {}
+    """The meshes bound_areas got in the next bm.mesh call, by their §2 record
+    (on small domains bm.mesh makes several and returns one: look up its own
+    with ``seen[mesh.generation]``)."""
+
+    class Seen(list):
+        def __getitem__(self, generation):
+            return next(m for m in self if m.generation is generation)
+
+    seen = Seen()
 
     def spy(mesh, max_area=None, **kw):
-        seen[mesh.generation.insertion] = mesh
+        seen.append(mesh)
         return bound_areas(mesh, max_area, **kw)
 
     monkeypatch.setattr(pipeline, "bound_areas", spy)
@@ -98,7 +104,7 @@ def test_global_max_area_is_a_hard_bound(w, h, max_area):
 def test_the_bound_keeps_the_radius_ratio(seen):
     d = two_regions()
     mesh = bm.mesh(d, size=d.region_size())
-    before = seen[mesh.generation.insertion]
+    before = seen[mesh.generation]
     assert len(mesh.points) > len(before.points)  # nodes were needed
     before = before.quality()
     assert mesh.quality().min() >= 0.75 * before.min()
@@ -136,7 +142,7 @@ def test_split_segments_keep_the_boundary_first_and_their_markers(seen, monkeypa
     monkeypatch.setattr(pipeline, "_with_regions", lambda domain, user: user)
     mesh = bm.mesh(d)  # the size field knows no region: the bound splits the segments
     n_b = mesh.n_boundary
-    assert n_b > seen[mesh.generation.insertion].n_boundary
+    assert n_b > seen[mesh.generation].n_boundary
     P = mesh.points
     on = (P[:, 0] == 0) | (P[:, 0] == 8) | (P[:, 1] == 0) | (P[:, 1] == 8) | (P[:, 0] == 4)
     assert np.array_equal(np.flatnonzero(on), np.arange(n_b))  # exactly on them, first
@@ -147,7 +153,7 @@ def test_split_segments_keep_the_boundary_first_and_their_markers(seen, monkeypa
     wall = (P[edges][:, :, 0] == 4).all(axis=1)
     assert np.all(marks[wall] == 5) and np.all(marks[~wall] == 1)
     assert mesh.quality().min() > 0.1  # no sliver along the finely split wall
-    before = seen[mesh.generation.insertion]
+    before = seen[mesh.generation]
     first = before.n_boundary  # the old boundary nodes keep their places
     assert np.array_equal(mesh.radii[:first], before.radii[:first])
 

@@ -226,9 +226,10 @@ def test_mesh_records_its_insertion():
     square = bm.Domain.from_loops([[(0, 0), (1, 0), (1, 1), (0, 1)]])
     assert bm.mesh(square, size=0.02).generation.insertion == "frontal"
     assert bm.mesh(square, size=0.1, insertion="centroid").generation.insertion == "centroid"
-    small = bm.mesh(square, size=0.1)  # both tried: the record names the one returned
-    again = bm.mesh(square, size=0.1, insertion=small.generation.insertion)
-    assert np.array_equal(small.points, again.points)
+    small = bm.mesh(square, size=0.1)  # several tried: the record names the one returned
+    if small.generation.seeds:  # (the one without frontal seeds has no public switch)
+        again = bm.mesh(square, size=0.1, insertion=small.generation.insertion)
+        assert np.array_equal(small.points, again.points)
 
 
 @given(corner_domains(max_holes=2))
