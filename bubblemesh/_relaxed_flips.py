@@ -172,15 +172,16 @@ def _unflip(tri, nbr, t, u, saved_tri, saved_nbr):
 
 @njit(cache=True)
 def relaxed_flips(X, tri, nbr, keys, movable, ideal, limit, keep, passes, sweeps, halvings,
-                  steps, remember=True):
+                  steps, changed, remember=True):
     """The module docstring's flips; X, tri and nbr in place.  ``ideal``: the
     ideal triangle count of every node; ``limit``: the largest area each
     triangle may take (inf: none; a flip is kept only if every triangle that
     changed is within its own; t and u keep theirs, their quadrilateral lies
     in one region).  With ``remember`` an edge is not tried again while no
     node of the triangles its trial read has moved or changed its star since
-    (the trial would find what it did: an exact active set).  Returns the
-    flips kept."""
+    (the trial would find what it did: an exact active set).  ``changed``
+    (n,) bool is set at every node that a kept flip moved or re-linked.
+    Returns the flips kept."""
     n, m = X.shape[0], tri.shape[0]
     home = np.empty(n, np.int64)  # a triangle at every node, kept valid across flips
     count = np.zeros(n, np.int64)
@@ -267,4 +268,7 @@ def relaxed_flips(X, tri, nbr, keys, movable, ideal, limit, keep, passes, sweeps
                 tried[t, k] = kept
         if kept_now == 0:
             break
+    for i in range(n):
+        if touched[i] > 0:
+            changed[i] = True
     return kept

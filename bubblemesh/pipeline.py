@@ -23,8 +23,9 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    ratio (a compass search where they are blocked).  Last (after the area
    bound's insertions, if any), edge flips judged after relaxing the nodes
    around them (:mod:`bubblemesh._relaxed_flips`: they move valence defects
-   a single flip cannot pay for) and the compass search, up to the mesh's
-   minimum before them, on the stars they left below it.
+   a single flip cannot pay for), the compass search, up to the mesh's
+   minimum before them, on the stars they left below it, and gradient steps
+   on the star means around them.
    After the flips the mesh is valid and conforming (every segment an edge,
    boundary nodes unmoved) but in general no longer constrained-Delaunay.  Final
    guarantee: the result's smallest radius ratio is never below the §2
@@ -118,6 +119,7 @@ MEAN_STEPS = 3  # gradient steps per star visit before any compass search
 RELAXED_PASSES, RELAXED_SWEEPS = 8, 3  # flips judged after relaxing (_relaxed_flips)
 RELAXED_KEEP = 0.8  # they may lower a triangle's ratio to min(its value, this)
 REPAIR_ROUNDS = 3  # compass passes on the stars the relaxed flips left below the minimum
+RELAXED_POLISH = 3  # then mean-ratio sweeps over the nodes they changed and their neighbours
 BOTH_BELOW, BOTH_COUNT = 5000, 0.03  # both insertions up to this many elements (auto)
 COUNT_TOL = 0.05  # a count this close to the size field's fits it
 UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
@@ -679,7 +681,10 @@ def _relaxed(mesh, max_area):
     below the §2 mesh's smallest radius ratio; then the compass search on the
     stars they left below the mesh's minimum before them, each up to that
     minimum (so the result's minimum follows what the earlier steps
-    reached), kept if it breaks no area bound."""
+    reached); then gradient steps on the star means of the nodes they
+    changed and their neighbours (the flips relaxed a few rings; the rest of
+    the mesh had settled around the old connectivity), never below the
+    mesh's minimum; each of the two kept if it breaks no area bound."""
     if not RELAXED_PASSES:
         return mesh
     X, T = np.array(mesh.points), np.array(mesh.triangles)
@@ -691,9 +696,10 @@ def _relaxed(mesh, max_area):
     stats = mesh.optimization
     before = float(triangle_quality(X, T).min(initial=1.0))
     keep = max(RELAXED_KEEP, getattr(stats, "min_ratio_generation", 0.0))
+    changed = np.zeros(len(X), np.bool_)
     flips = relaxed_flips(X, T, N, segment_keys(segments, len(X)), movable,
                           ideal_counts(X, T, len(X)), limit, keep, RELAXED_PASSES,
-                          RELAXED_SWEEPS, MEAN_HALVINGS, MEAN_STEPS)
+                          RELAXED_SWEEPS, MEAN_HALVINGS, MEAN_STEPS, changed)
     if not flips:
         return mesh
     relaxed = X.copy()
@@ -706,6 +712,15 @@ def _relaxed(mesh, max_area):
             break
     if repaired and (_triangle_areas(X, T) > limit).any():
         X = relaxed
+    if RELAXED_POLISH:
+        settled = X.copy()
+        floor = float(triangle_quality(X, T).min(initial=1.0))
+        near = np.zeros(len(X), np.bool_)  # the changed nodes and their neighbours
+        near[np.unique(T[changed[T].any(axis=1)])] = True
+        mean_polish(X, T, ptr, idx, mesh.n_boundary, RELAXED_POLISH, movable & near, floor,
+                    MEAN_HALVINGS, 1.0, MEAN_STEPS)
+        if (_triangle_areas(X, T) > limit).any():
+            X = settled
     stats = replace(stats, flips=stats.flips + flips,
                     min_ratio=float(radius_ratio(X, T).min(initial=1.0)))
     return replace(mesh, points=X, triangles=T, neighbors=N, optimization=stats)

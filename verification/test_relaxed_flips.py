@@ -45,12 +45,13 @@ def _areas(X, tri):
     return 0.5 * (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])
 
 
-def _run(X, tri, nbr, segments, n_b, limit, keep, remember=True, passes=6):
+def _run(X, tri, nbr, segments, n_b, limit, keep, remember=True, passes=6, changed=None):
     movable = np.arange(len(X)) >= n_b
     movable[np.unique(segments)] = False
+    changed = np.zeros(len(X), np.bool_) if changed is None else changed
     return relaxed_flips(X, tri, nbr, segment_keys(np.asarray(segments), len(X)), movable,
                          ideal_counts(X, tri, len(X)), limit, keep, passes, SWEEPS, HALVINGS,
-                         STEPS, remember)
+                         STEPS, changed, remember)
 
 
 @given(corner_domains(max_holes=2), st.sampled_from([0.3, 0.2]), st.floats(0.5, 1.0),
@@ -58,13 +59,18 @@ def _run(X, tri, nbr, segments, n_b, limit, keep, remember=True, passes=6):
 def test_relaxed_flips_keep_the_mesh_valid_conforming_and_within_its_bounds(loops, size, keep,
                                                                            bounded, seed):
     m, X, tri, nbr = _jittered(loops, size, seed)
-    X0, q0 = X.copy(), O.radius_ratio_reference(X, tri)
+    X0, q0, tri0 = X.copy(), O.radius_ratio_reference(X, tri), tri.copy()
     area0 = _areas(X, tri)
+    changed = np.zeros(len(X), np.bool_)
     limit = np.full(len(tri), np.inf)
     if bounded:  # some triangles just at their bound: the flips must respect every one
         limit = np.where(np.arange(len(tri)) % 2 == 0, area0 * 1.01, 1.2 * area0.max())
-    flips = _run(X, tri, nbr, m.segments, m.n_boundary, limit, keep)
+    flips = _run(X, tri, nbr, m.segments, m.n_boundary, limit, keep, changed=changed)
     O.check_valid(X, tri, nbr)
+    np.testing.assert_array_equal(X[~changed], X0[~changed])  # the rest stays put
+    same = ~changed[tri0].any(axis=1)
+    np.testing.assert_array_equal(tri[same], tri0[same])
+    assert changed.any() == (flips > 0)
     O.check_conforming(X, tri, m.segments, area=m.domain.area, rel=1e-9)
     np.testing.assert_array_equal(X[: m.n_boundary], X0[: m.n_boundary])
     q = O.radius_ratio_reference(X, tri)
