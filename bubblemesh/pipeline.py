@@ -125,6 +125,7 @@ COUNT_TOL = 0.05  # a count this close to the size field's fits it
 UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
 FRONTAL_ELEMENTS = 1000  # frontal insertion from this many elements of the cap size up
 ITERATIONS = {"centroid": 200, "frontal": 30}  # §3 force iterations by default
+ROUNDS = {"centroid": 3, "frontal": 1}  # smoothing rounds by default (the front starts regular)
 RADII_REFRESH = 10  # §3's radii follow the size field at the nodes' positions this often
 LATTICE_MARGIN = 4.0  # the lattice keeps this many sizes off every boundary node
 
@@ -244,7 +245,7 @@ def _check(name, value, ok, expected):
 
 def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="auto",
                 max_iterations=None, tol=1e-3, amplification=1.7, alpha=0.2, momentum=0.7,
-                rings=3, smoothing_rounds=3, smoothing_sweeps=2, progress=False) -> Mesh:
+                rings=3, smoothing_rounds=None, smoothing_sweeps=2, progress=False) -> Mesh:
     """The robust mesher (module docstring); :func:`bubblemesh.mesh` documents
     the arguments."""
     if not isinstance(domain, Domain):
@@ -258,7 +259,8 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
     _check("tol", tol, lambda v: math.isfinite(v) and v >= 0, "finite and >= 0")
     for name, value, top in (("max_iterations", 0 if max_iterations is None else max_iterations,
                               None), ("rings", rings, 6),
-                             ("smoothing_rounds", smoothing_rounds, None),
+                             ("smoothing_rounds",
+                              0 if smoothing_rounds is None else smoothing_rounds, None),
                              ("smoothing_sweeps", smoothing_sweeps, None)):
         least = 1 if name == "rings" else 0
         if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not (
@@ -283,7 +285,7 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
     options = dict(max_iterations=max_iterations, tol=float(tol),
                    amplification=float(amplification), alpha=float(alpha),
                    momentum=float(momentum), rings=int(rings),
-                   smoothing_rounds=int(smoothing_rounds),
+                   smoothing_rounds=smoothing_rounds,
                    smoothing_sweeps=int(smoothing_sweeps))
     mesh = _mesh_with(domain, fine, field, frontal, True, notes, max_area, progress, clock,
                       options)
@@ -335,9 +337,9 @@ def _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, 
     if frontal:
         generated = _first_row_first(generated)
     options = dict(options)
-    if options["max_iterations"] is None:
-        options["max_iterations"] = ITERATIONS[gen.insertion]
-    options["max_iterations"] = int(options["max_iterations"])
+    for name, default in (("max_iterations", ITERATIONS), ("smoothing_rounds", ROUNDS)):
+        given = options[name]
+        options[name] = int(default[gen.insertion] if given is None else given)
     clock.lap("generation")
     try:
         mesh = stable_optimize(generated, size_field=field, clock=clock, **options)
