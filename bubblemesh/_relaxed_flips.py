@@ -6,7 +6,8 @@ flip alone makes two poor triangles: only once the nodes around it settle
 does it show whether the mesh gained.  So every interior edge ab (not a
 segment, its quadrilateral acbd strictly convex by the exact
 :func:`orient2d`, one of a, b, c, d off its ideal count, see
-:func:`bubblemesh._flips.ideal_counts`) is flipped to cd, the movable nodes
+:func:`bubblemesh._flips.ideal_counts`, and the flip not raising the sum of
+(count - ideal)^2) is flipped to cd, the movable nodes
 of the stars of a, b, c and d are relaxed by ``sweeps`` sweeps of
 :func:`bubblemesh._odt.polish_gathered` (gradient steps on each star's mean
 radius ratio, eq. 10), and the flip is kept if the ratios summed over the
@@ -31,7 +32,7 @@ from ._smoothing import _star_row, rho
 from .predicates import orient2d
 
 GAIN = 1e-9  # the summed ratios must grow by more than this (far above their rounding)
-MAX_DELTA = 0
+MAX_DELTA = 0  # flips that raise sum (count - ideal)^2 are not tried: they almost never pay
 MOST = 64  # a star or a neighbourhood larger than this is left alone
 
 
@@ -103,9 +104,9 @@ def _ratios(X, tri, ts, count, limit):
 @njit(cache=True)
 def _neighbourhood(tri, nbr, home, quad, movable, node_mark, tri_mark, stamp, nodes, ts, buf):
     """The movable nodes of the stars of the four ``quad`` nodes into
-    ``nodes`` and the triangles at those nodes, with the quad's two, into
-    ``ts`` (each once, by the stamps).  Returns (nodes, triangles), (-1, -1)
-    where a star is larger than MOST or the lists overflow."""
+    ``nodes`` and the triangles at those nodes into ``ts`` (each once, by the
+    stamps; two slots left for the quad's own).  Returns (nodes, triangles),
+    (-1, -1) where a star is larger than MOST or the lists overflow."""
     n_nodes = 0
     n_ts = 0
     for j in range(4):
@@ -127,7 +128,7 @@ def _neighbourhood(tri, nbr, home, quad, movable, node_mark, tri_mark, stamp, no
             return -1, -1
         for e in range(deg):
             if tri_mark[buf[e]] != stamp:
-                if n_ts == ts.shape[0]:
+                if n_ts >= ts.shape[0] - 2:
                     return -1, -1
                 tri_mark[buf[e]] = stamp
                 ts[n_ts] = buf[e]
@@ -189,18 +190,18 @@ def relaxed_flips(X, tri, nbr, keys, movable, ideal, limit, keep, passes, sweeps
         for k in range(3):
             home[tri[t, k]] = t
             count[tri[t, k]] += 1
-    node_mark = np.zeros(n, np.int64)
-    tri_mark = np.zeros(m, np.int64)
+    node_mark = np.zeros(n, np.int32)  # stamps and flip counts stay far below 2^31
+    tri_mark = np.zeros(m, np.int32)
     nodes = np.empty(4 * MOST, np.int64)
-    ts = np.empty(4 * MOST * MOST, np.int64)
+    ts = np.empty(4 * MOST * MOST + 2, np.int64)  # t and u come on top
     buf = np.empty(MOST, np.int64)
     rows = np.empty((MOST, 5))
     saved_x = np.empty((4 * MOST, 2))
     saved_tri = np.empty((2, 3), np.int64)
     saved_nbr = np.empty((2, 3), np.int64)
     quad = np.empty(4, np.int64)
-    touched = np.zeros(n, np.int64)  # the last kept flip that moved a node or changed its star
-    tried = np.full((m, 3), -1, np.int64)  # kept flips so far when an edge's trial failed
+    touched = np.zeros(n, np.int32)  # the last kept flip that moved a node or changed its star
+    tried = np.full((m, 3), -1, np.int32)  # kept flips so far when an edge's trial failed
     stamp = 0
     kept = 0
     for _ in range(passes):

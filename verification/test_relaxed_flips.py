@@ -17,10 +17,10 @@ from hypothesis import strategies as st
 from test_pipeline import corner_domains
 
 import bubblemesh as bm
+from bubblemesh import pipeline
 from bubblemesh._flips import ideal_counts, segment_keys
 from bubblemesh._relaxed_flips import relaxed_flips
 from bubblemesh.generation import generate_sized
-from bubblemesh.refinement import refine_boundary
 from bubblemesh.sizing import SizeField
 
 SWEEPS, HALVINGS, STEPS = 3, 4, 3
@@ -31,7 +31,7 @@ def _jittered(loops, size, seed):
     valence defects and poor triangles for the flips to work on."""
     domain = bm.Domain.from_loops(loops)
     field = SizeField.from_domain(domain, size=size)
-    m = generate_sized(refine_boundary(domain, field).to_domain(), field)
+    m = generate_sized(pipeline.refined_domain(domain, field), field)
     X = np.array(m.points)
     rng = np.random.default_rng(seed)
     inner = slice(m.n_boundary, None)
