@@ -54,7 +54,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ._area_bound import FILL, bound_areas, triangle_limits
+from ._area_bound import FILL, _areas, bound_areas, triangle_limits
 from ._area_bound import MARGIN as AREA_MARGIN
 from ._coincident import shared_positions
 from ._corners import split_corners
@@ -712,7 +712,7 @@ def _relaxed(mesh, max_area):
         repaired += taken
         if not taken:
             break
-    if repaired and (_triangle_areas(X, T) > limit).any():
+    if repaired and (_areas(X, T) > limit).any():
         X = relaxed
     if RELAXED_POLISH:
         settled = X.copy()
@@ -721,16 +721,11 @@ def _relaxed(mesh, max_area):
         near[np.unique(T[changed[T].any(axis=1)])] = True
         mean_polish(X, T, ptr, idx, mesh.n_boundary, RELAXED_POLISH, movable & near, floor,
                     MEAN_HALVINGS, 1.0, MEAN_STEPS)
-        if (_triangle_areas(X, T) > limit).any():
+        if (_areas(X, T) > limit).any():
             X = settled
     stats = replace(stats, flips=stats.flips + flips,
                     min_ratio=float(radius_ratio(X, T).min(initial=1.0)))
     return replace(mesh, points=X, triangles=T, neighbors=N, optimization=stats)
-
-
-def _triangle_areas(X, T):
-    u, v = X[T[:, 1]] - X[T[:, 0]], X[T[:, 2]] - X[T[:, 0]]
-    return 0.5 * (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])
 
 
 def _insertion(mesh):
