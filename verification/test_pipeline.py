@@ -289,17 +289,29 @@ def test_small_domains_get_the_best_of_three_meshes(case, monkeypatch):
         assert not rank(auto)[1] and any(rank(m)[1] for m in made)
 
 
-def test_the_field_count_is_the_integral_of_the_element_density():
-    """sizing.field_count on a fine mesh of a domain against the quality
-    study's adaptive integral of the same field over the same domain."""
-    from bubblemesh.sizing import field_count
-    from bubblemesh.studies import quality as Q
+def _grid(x0, x1, y0, y1, n):
+    """A structured triangulation of the rectangle, n x n squares, each cut
+    into two counter-clockwise triangles."""
+    x, y = np.meshgrid(np.linspace(x0, x1, n + 1), np.linspace(y0, y1, n + 1), indexing="ij")
+    P = np.column_stack([x.ravel(), y.ravel()])
+    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    a = (i * (n + 1) + j).ravel()
+    b, c, d = a + n + 1, a + n + 2, a + 1
+    return P, np.concatenate([np.column_stack([a, b, c]), np.column_stack([a, c, d])])
 
-    d = bm.Domain.from_loops([np.array([(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)], float)])
-    field = SizeField.from_domain(d, size=lambda xy: 0.05 + 0.1 * xy[:, 0])
-    fine = bm.mesh(d, size=0.06)  # ~1900 elements: the midpoint rule is within 0.2%
-    assert abs(field_count(field, fine.points, fine.triangles)
-               / Q.predicted_count(d, field).count - 1) < 0.01
+
+def test_the_field_count_is_the_integral_of_the_element_density():
+    """sizing.field_count of h(x) = 0.05 + 0.1 x over the L-shape [0,2]x[0,1] +
+    [0,1]x[1,2] (two structured grids) against the closed form of the
+    integral of 4 / (sqrt(3) h^2): (4 / sqrt(3)) (160 + 400 / 3)."""
+    from bubblemesh.sizing import field_count
+
+    def h(xy):
+        return 0.05 + 0.1 * xy[:, 0]
+
+    total = sum(field_count(h, *_grid(*box, 200)) for box in ((0, 2, 0, 1), (0, 1, 1, 2)))
+    exact = 4 / math.sqrt(3) * (160 + 400 / 3)
+    assert abs(total / exact - 1) < 1e-3
 
 
 def test_segments_ulps_apart_do_not_ask_for_a_zero_size():
