@@ -25,7 +25,11 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    around them (:mod:`bubblemesh._relaxed_flips`: they move valence defects
    a single flip cannot pay for), the compass search, up to the mesh's
    minimum before them, on the stars they left below it, and gradient steps
-   on the star means around them.
+   on the star means around them.  Very last, the patches around the
+   triangles below REPAIR_BELOW are re-triangulated with a node inserted or
+   removed where that lifts their worst ratio without lowering the mean
+   (:mod:`bubblemesh._patch_repair`: a row one node short, as in a gap
+   between a hole and a wall, has no good positions to move to).
    After the flips the mesh is valid and conforming (every segment an edge,
    boundary nodes unmoved) but in general no longer constrained-Delaunay.  Final
    guarantee: the result's smallest radius ratio is never below the §2
@@ -70,8 +74,9 @@ from ._flips import (
 from ._forces import move
 from ._inside import boundary_clearance
 from ._lattice import lattice_points
-from ._mesh import GenerationStats, Mesh, OptimizationStats
+from ._mesh import GenerationStats, Mesh, OptimizationStats, _half_mean_edge
 from ._odt import mean_polish, odt_smooth
+from ._patch_repair import repair_worst
 from ._relaxed_flips import relaxed_flips
 from ._rings import node_adjacency, ring_neighbors, vertex_triangles
 from ._seeds import frontal_seeds, inside
@@ -85,6 +90,7 @@ from .quality import radius_ratio
 from .refinement import refine_boundary
 from .sizing import _EQUILATERAL_RADIUS, SizeField, as_size_function, field_count
 from .timing import PhaseClock
+from .topology import neighbors_of
 from .triangulation import constrained_delaunay
 
 __all__ = ["QualityWarning", "RobustGenerationStats", "RobustOptimizationStats", "robust_mesh",
@@ -120,6 +126,9 @@ RELAXED_PASSES, RELAXED_SWEEPS = 8, 3  # flips judged after relaxing (_relaxed_f
 RELAXED_KEEP = 0.8  # they may lower a triangle's ratio to min(its value, this)
 REPAIR_ROUNDS = 3  # compass passes on the stars the relaxed flips left below the minimum
 RELAXED_POLISH = 3  # then mean-ratio sweeps over the nodes they changed and their neighbours
+REPAIR_BELOW = 0.9  # patches around triangles below this ratio are re-triangulated
+REPAIR_OPS = 16  # at most this many of them
+REPAIR_WINDOW = 0.035  # they keep the element count this close to the field's (or bring it closer)
 BOTH_BELOW, BOTH_COUNT = 5000, 0.03  # both insertions up to this many elements (auto)
 COUNT_TOL = 0.05  # a count this close to the size field's fits it
 UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
@@ -157,7 +166,9 @@ class RobustOptimizationStats(OptimizationStats):
     ``smoothing_moves`` (guarded moves taken), ``min_ratio_generation`` and
     ``min_ratio`` (eq. 10, before and after), ``fallback`` ("none",
     "reverted" or "generation"), ``settling_moves`` (ODT and mean-polish
-    moves) and ``flips`` (valence and quality flips) of the settling step."""
+    moves) and ``flips`` (valence and quality flips) of the settling step,
+    ``repairs`` (patches re-triangulated by :mod:`bubblemesh._patch_repair`)
+    and ``repair_nodes`` (the nodes they added, net)."""
 
     converged: bool = False
     smoothing_moves: int = 0
@@ -166,6 +177,8 @@ class RobustOptimizationStats(OptimizationStats):
     fallback: str = "none"
     settling_moves: int = 0
     flips: int = 0
+    repairs: int = 0
+    repair_nodes: int = 0
 
 
 def corner_angles(domain: Domain) -> np.ndarray:
@@ -349,7 +362,8 @@ def _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, 
                            mean_below=MEAN_BELOW[gen.insertion])[:2]
 
         # Triangle's -a, global and regional: hard bounds
-        return _relaxed(bound_areas(mesh, max_area, settle=settle), max_area)
+        return _repaired(_relaxed(bound_areas(mesh, max_area, settle=settle), max_area),
+                         max_area, field)
     except MemoryError:  # sizes far finer than the domain's extent
         raise MeshingError("mesh: not enough memory to optimise the mesh this size field "
                            "asks for (sizes far finer than the domain)") from None
@@ -726,6 +740,47 @@ def _relaxed(mesh, max_area):
     stats = replace(stats, flips=stats.flips + flips,
                     min_ratio=float(radius_ratio(X, T).min(initial=1.0)))
     return replace(mesh, points=X, triangles=T, neighbors=N, optimization=stats)
+
+
+def _repaired(mesh, max_area, field):
+    """The very last step: the patches around the worst triangles
+    re-triangulated with a node inserted or removed where that raises their
+    smallest ratio (:mod:`bubblemesh._patch_repair`), within the area bounds,
+    the element count within REPAIR_WINDOW of the count ``field`` asks for
+    (:func:`~bubblemesh.sizing.field_count`) or brought closer to it; per-node
+    data of an inserted node from its nearest corner."""
+    X, T, N = mesh.points, mesh.triangles, mesh.neighbors
+    if not REPAIR_OPS or triangle_quality(X, T).min(initial=1.0) >= REPAIR_BELOW:
+        return mesh
+    segments = np.asarray(mesh.segments)
+    movable = np.arange(len(X)) >= mesh.n_boundary
+    movable[np.unique(segments)] = False
+    regions = getattr(mesh.domain, "regions", None)
+    limit = triangle_limits(X, T, N, regions, max_area) / (1.0 + AREA_MARGIN)
+    asked = field_count(field, X, T)
+    counts = (asked * (1.0 - REPAIR_WINDOW), asked * (1.0 + REPAIR_WINDOW))
+    n = len(X)
+    X, T, old, repairs = repair_worst(X, T, segments, movable, limit, REPAIR_BELOW, REPAIR_OPS,
+                                      counts, MEAN_HALVINGS, MEAN_STEPS)
+    if not repairs:
+        return mesh
+    N = _walled_neighbors(T, segments, len(X))
+    radii = np.where(old >= 0, np.asarray(mesh.radii)[np.maximum(old, 0)],
+                     _half_mean_edge(X, T))
+    stats = replace(mesh.optimization, repairs=repairs, repair_nodes=len(X) - n,
+                    min_ratio=float(radius_ratio(X, T).min(initial=1.0)))
+    return replace(mesh, points=X, triangles=T, neighbors=N, radii=radii, optimization=stats)
+
+
+def _walled_neighbors(T, segments, n):
+    """Neighbours of T with -1 across every segment (the boundary and the
+    interfaces)."""
+    N = neighbors_of(T)
+    a, b = T[:, [1, 2, 0]], T[:, [2, 0, 1]]
+    key = np.minimum(a, b) * n + np.maximum(a, b)
+    walls = np.minimum(segments[:, 0], segments[:, 1]) * n + np.maximum(segments[:, 0],
+                                                                         segments[:, 1])
+    return np.where(np.isin(key, walls), -1, N)
 
 
 def _insertion(mesh):

@@ -31,8 +31,9 @@ def test_equality_is_identity(optimised):
 def test_stage_records_are_set_at_construction(optimised):
     gen, opt = optimised.generation, optimised.optimization
     assert isinstance(gen, bm.GenerationStats) and isinstance(opt, bm.OptimizationStats)
-    assert gen.stop == "population" and gen.insertions + getattr(gen, "seeds", 0) == len(
-        optimised.points) - optimised.n_boundary  # the nodes: boundary, seeds, insertions
+    assert gen.stop == "population" and gen.insertions + getattr(gen, "seeds", 0) + getattr(
+        opt, "repair_nodes", 0) == len(optimised.points) - optimised.n_boundary
+    # the nodes: boundary, seeds, insertions and the last step's repairs
     assert 1 <= opt.iterations <= 200 and opt.amplification == 1.7
     assert optimised.stats["iterations"] == opt.iterations
     assert optimised.stats["insertions"] == gen.insertions

@@ -1,0 +1,279 @@
+"""Local re-triangulation of the worst triangles (not in the paper; after §3).
+
+§3's forces (eq. 7-9), the smoothing and the flips move nodes and edges but
+never change how many nodes a neighbourhood holds.  Where a row has one node
+too few (a gap between a hole and a wall one triangle high, its nodes
+staggered badly) or one too many, no position of the nodes is good: Gmsh's
+front puts a node in such a gap, and the paper's reason (2) for its elements
+below 0.7 is this population defect.  So, worst triangle first:
+
+- the *patch* is the triangles touching the worst triangle's corners (for
+  the pair move, also those of a neighbour across an interior edge);
+- variants: one point inserted (the triangle's circumcentre, centroid or an
+  edge midpoint), two points inserted (the centroids of it and of a
+  neighbour), or one of its free nodes removed; the patch is re-triangulated
+  constrained-Delaunay (:func:`~bubblemesh.triangulation.constrained_delaunay`,
+  exact predicates) inside its own outline, which is kept edge for edge, so
+  the mesh stays conforming and boundary nodes never move;
+- the free nodes of the new triangles and their neighbours are relaxed: a
+  compass search for each star's worst radius ratio (eq. 10), then gradient
+  steps on the star means (:mod:`bubblemesh._smoothing`, :mod:`bubblemesh._odt`);
+- the variant whose changed triangles have the highest smallest ratio (then
+  the highest mesh mean) is kept if that smallest ratio is above theirs
+  before, the mesh's mean ratio does not fall, every changed triangle keeps
+  its area bound and the element count stays in the window ``counts`` (or
+  comes closer to it).
+
+Rounds stop when the worst triangle is at least ``below``, when no variant of
+the WORST worst triangles pays, or after ``rounds``.  Every round is
+deterministic (ties broken by index)."""
+
+import numpy as np
+
+from ._odt import mean_polish
+from ._smoothing import compass_polish, stars, triangle_quality
+from .errors import GeometryError
+from .triangulation import constrained_delaunay
+
+WORST = 4  # triangles tried per round, worst first
+RISE = 1e-9  # a smaller rise of the smallest ratio is rounding, not a repair
+MEAN_DROP = 0.0  # a variant may lower the mesh's mean ratio by at most this
+COMPASS_ROUNDS = 3
+POLISH_SWEEPS = 3
+
+
+def repair_worst(X, T, segments, movable, limit, below, rounds, counts, halvings, steps):
+    """Re-triangulate the patches around the worst triangles (module
+    docstring).  X (n, 2), T (m, 3) CCW, ``movable`` (n,) free nodes,
+    ``limit`` (m,) area bound of each triangle, ``counts`` (low, high) the
+    element counts a variant may leave; ``halvings`` and ``steps`` as in
+    :func:`~bubblemesh._odt.mean_polish`.  Returns (X, T, old, operations):
+    the new arrays, with the removed nodes gone and the inserted ones after
+    the old (node numbers below the first removed one unchanged), ``old``
+    each node's number in X (-1: inserted) and the number of variants kept."""
+    X, T, limit = np.array(X, np.float64), np.array(T, np.int64), np.array(limit, np.float64)
+    free = np.array(movable, np.bool_)
+    alive = np.ones(len(X), np.bool_)
+    old = np.arange(len(X))
+    walls = _edge_keys(np.asarray(segments, np.int64).reshape(-1, 2))
+    operations = 0
+    for _ in range(rounds):
+        q = triangle_quality(X, T)
+        worst = _worst(q, below)
+        if not len(worst):
+            break
+        ptr, idx = stars(T, len(X))
+        for t in worst:
+            best = _best_variant(X, T, q, ptr, idx, int(t), free, limit, walls, halvings,
+                                 steps, counts)
+            if best is not None:
+                X, T, limit, free, alive, old = _apply(X, T, limit, free, alive, old, best)
+                operations += 1
+                break
+        else:
+            break
+    new_id = np.cumsum(alive) - 1
+    return X[alive], new_id[T], old[alive], operations
+
+
+def _worst(q, below):
+    """The WORST triangles of smallest ratio below ``below``, worst first
+    (ties by index)."""
+    k = min(WORST, len(q))
+    if not k:
+        return q[:0].astype(np.int64)
+    first = np.argpartition(q, k - 1)[:k]
+    first = first[np.lexsort((first, q[first]))]
+    return first[q[first] < below]
+
+
+def _edge_keys(edges):
+    """Undirected edges as a set of (low, high) pairs."""
+    lo, hi = np.minimum(edges[:, 0], edges[:, 1]), np.maximum(edges[:, 0], edges[:, 1])
+    return set(zip(lo.tolist(), hi.tolist()))
+
+
+def _patch(ptr, idx, nodes):
+    """The triangles touching ``nodes``, sorted."""
+    return np.unique(np.concatenate([idx[ptr[v]:ptr[v + 1]] for v in nodes]))
+
+
+def _variants(X, T, N_of, t, free):
+    """(patch corner nodes, added points, removed node) of each variant for
+    triangle t: one point, a pair with each neighbour, one node removed."""
+    tri = T[t]
+    p = X[tri]
+    out = [(tri, [a], -1) for a in [_circumcentre(p), p.mean(axis=0)]
+           + [0.5 * (p[k] + p[(k + 1) % 3]) for k in range(3)]]
+    for u in N_of(t):
+        out.append((np.concatenate([tri, T[u]]), [p.mean(axis=0), X[T[u]].mean(axis=0)], -1))
+    out += [(tri, [], int(v)) for v in tri if free[v]]
+    return out
+
+
+def _circumcentre(p):
+    """Circumcentre of the triangle with corners p (3, 2); the centroid if it
+    is degenerate."""
+    (bx, by), (cx, cy) = p[1] - p[0], p[2] - p[0]
+    d = 2.0 * (bx * cy - by * cx)
+    if d == 0.0:
+        return p.mean(axis=0)
+    b2, c2 = bx * bx + by * by, cx * cx + cy * cy
+    return p[0] + np.array([(cy * b2 - by * c2) / d, (bx * c2 - cx * b2) / d])
+
+
+def _allowed(m, grown, counts):
+    """May a variant take the element count from m to ``grown``: into the
+    window ``counts`` or closer to it?"""
+    low, high = counts
+    return low <= grown <= high or abs(grown - min(max(grown, low), high)) < abs(
+        m - min(max(m, low), high))
+
+
+def _best_variant(X, T, q, ptr, idx, t, free, limit, walls, halvings, steps, counts):
+    """The best kept variant for triangle t as (patch, new triangles, new
+    points, removed node, relaxed nodes and their positions, score), or
+    None."""
+    def across(s):
+        return _edge_neighbours(T, ptr, idx, s, walls)
+
+    best, total, m = None, float(q.sum()), len(T)
+    for corners, added, removed in _variants(X, T, across, t, free):
+        growth = 2 * len(added) - (2 if removed >= 0 else 0)
+        if not _allowed(m, m + growth, counts):
+            continue
+        patch = _patch(ptr, idx, corners)
+        made = _retriangulate(X, T, patch, added, removed, walls)
+        if made is None:
+            continue
+        tried = _relax(X, T, q, ptr, idx, patch, made, np.asarray(added).reshape(-1, 2), free,
+                       limit, halvings, steps)
+        if tried is None:
+            continue
+        low, gain, nodes, positions = tried
+        score = (low, (total + gain) / (m + growth))
+        if score[1] < total / m - MEAN_DROP:
+            continue
+        if best is None or score > best[-1]:
+            best = (patch, made, np.asarray(added).reshape(-1, 2), removed, nodes, positions,
+                    score)
+    return best
+
+
+def _edge_neighbours(T, ptr, idx, t, walls):
+    """The triangles sharing an edge with t that is not a segment."""
+    out = []
+    for k in range(3):
+        a, b = int(T[t, k]), int(T[t, (k + 1) % 3])
+        if (min(a, b), max(a, b)) in walls:
+            continue
+        around = idx[ptr[a]:ptr[a + 1]]
+        for u in around[(T[around] == b).any(axis=1)]:
+            if u != t:
+                out.append(int(u))
+    return out
+
+
+def _outline(tris):
+    """Directed edges of the triangles ``tris`` that bound their union."""
+    e = np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]])
+    key = set(zip(e[:, 0].tolist(), e[:, 1].tolist()))
+    return sorted((a, b) for a, b in key if (b, a) not in key)
+
+
+def _retriangulate(X, T, patch, added, removed, walls):
+    """The constrained Delaunay triangulation of the patch with ``added``
+    points inserted (numbered len(X), len(X) + 1, ...) and node ``removed``
+    taken out, in global node numbers; None unless it fills exactly the
+    patch's outline with every added point used (a point off the patch or on
+    its outline) and keeps every segment inside the patch."""
+    sub = T[patch]
+    outline = _outline(sub)
+    nodes = np.unique(sub)
+    if removed >= 0:
+        if any(removed in edge for edge in outline):
+            return None
+        nodes = nodes[nodes != removed]
+    inner = [e for e in _edge_keys(np.concatenate([sub[:, [0, 1]], sub[:, [1, 2]],
+                                                   sub[:, [2, 0]]])) & walls
+             if e not in {(min(a, b), max(a, b)) for a, b in outline}]
+    glob = np.concatenate([nodes, len(X) + np.arange(len(added))])  # sorted
+    if inner and removed >= 0 and any(removed in e for e in inner):
+        return None
+    pairs = outline + inner + [(b, a) for a, b in inner]  # both ways: an interface
+    P = np.vstack([X[nodes]] + [np.reshape(a, (1, 2)) for a in added])
+    try:
+        tri, _ = constrained_delaunay(P, np.searchsorted(glob, np.asarray(pairs, np.int64)))
+    except GeometryError:
+        return None
+    made = glob[tri]
+    expected = len(patch) + 2 * len(added) - (2 if removed >= 0 else 0)
+    if len(made) != expected or _outline(made) != outline:
+        return None
+    if len(added) and not np.isin(glob[len(nodes):], made).all():
+        return None
+    return made
+
+
+def _relax(X, T, q, ptr, idx, patch, made, added, free, limit, halvings, steps):
+    """Relax the free nodes of ``made`` (the patch's new triangles) and
+    their neighbours on a copy; (smallest ratio of the changed triangles,
+    change of the summed ratio, relaxed global nodes, their positions), or
+    None if the smallest ratio does not rise or an area bound breaks."""
+    n = len(X)
+    ring = np.unique(made)
+    outside = np.setdiff1d(np.unique(np.concatenate([idx[ptr[v]:ptr[v + 1]]
+                                                     for v in ring[ring < n]])), patch)
+    near = np.unique(np.concatenate([ring, T[outside].ravel()]))
+    relaxed = near[(near >= n) | free[np.minimum(near, n - 1)]]
+    old = np.setdiff1d(np.unique(np.concatenate(
+        [idx[ptr[v]:ptr[v + 1]] for v in relaxed[relaxed < n]] + [outside])), patch)
+    sub = np.concatenate([T[old], made])
+    nodes = np.unique(sub)  # the added ones (>= n) last
+    Xl = np.vstack([X[nodes[nodes < n]], added[nodes[nodes >= n] - n]])
+    Tl = np.searchsorted(nodes, sub)
+    mov = np.isin(nodes, relaxed)
+    before = min(float(q[patch].min()), float(q[old].min(initial=1.0)))
+    lptr, lidx = stars(Tl, len(nodes))
+    for _ in range(COMPASS_ROUNDS):
+        if not compass_polish(Xl, Tl, lptr, lidx, 0, 1.0, mov, 2.0):
+            break
+    ql = triangle_quality(Xl, Tl)
+    mean_polish(Xl, Tl, lptr, lidx, 0, POLISH_SWEEPS, mov, float(ql.min()), halvings, 1.0,
+                steps)
+    ql = triangle_quality(Xl, Tl)
+    low = float(ql.min())
+    if low <= before + RISE:
+        return None
+    bound = np.concatenate([limit[old], np.full(len(made), limit[patch].min())])
+    if (_doubled_areas(Xl, Tl) > 2.0 * bound).any():
+        return None
+    gain = float(ql.sum()) - float(q[old].sum()) - float(q[patch].sum())
+    return low, gain, nodes[mov], Xl[mov]
+
+
+def _doubled_areas(X, T):
+    """Twice the signed area of each triangle."""
+    a, b, c = X[T[:, 0]], X[T[:, 1]], X[T[:, 2]]
+    return (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+
+
+def _apply(X, T, limit, free, alive, old, best):
+    """The mesh with variant ``best`` in place: new points appended (old
+    number -1), the removed node marked dead (dropped at the end), relaxed
+    nodes moved, the patch's rows replaced by the new triangles (appended)."""
+    patch, made, added, removed, nodes, positions, _ = best
+    old = np.concatenate([old, np.full(len(added), -1, np.int64)])
+    X = np.vstack([X, added])
+    X[nodes] = positions
+    free = np.concatenate([free, np.ones(len(added), np.bool_)])
+    alive = np.concatenate([alive, np.ones(len(added), np.bool_)])
+    if removed >= 0:
+        alive[removed] = False
+        free[removed] = False
+    bound = limit[patch].min()
+    rest = np.ones(len(T), np.bool_)
+    rest[patch] = False
+    T = np.concatenate([T[rest], made])
+    limit = np.concatenate([limit[rest], np.full(len(made), bound)])
+    return X, T, limit, free, alive, old

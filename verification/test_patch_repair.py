@@ -1,0 +1,162 @@
+"""Local re-triangulation of the worst triangles (bubblemesh._patch_repair),
+the last step of bm.mesh: validity, conformity, fixed boundary nodes, the
+smallest ratio strictly up and the mean not down with every kept variant, the
+area bounds and the count window, same bits on a second run; a node put into
+a perfect lattice taken out again, and a gap one triangle high given nodes.
+
+Oracles: verification/oracles.py (exact orientation and conformity, the radius
+ratio from the classical formulas), numpy areas and valence counts."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import oracles as O
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from test_pipeline import corner_domains
+from test_relaxed_flips import _areas, _jittered, _lattice_patch
+
+import bubblemesh as bm
+from bubblemesh import pipeline
+from bubblemesh._patch_repair import repair_worst
+from bubblemesh.sizing import SizeField, field_count
+
+HALVINGS, STEPS = 4, 3
+EVERY = (0.0, math.inf)  # no count window
+
+
+def _repair(X, tri, segments, n_b, limit, below=1.0, rounds=8, counts=EVERY):
+    movable = np.arange(len(X)) >= n_b
+    movable[np.unique(segments)] = False
+    return repair_worst(X, tri, segments, movable, limit, below, rounds, counts, HALVINGS, STEPS)
+
+
+@given(corner_domains(max_holes=2), st.sampled_from([0.3, 0.2]), st.booleans(),
+       st.floats(0.0, 0.06), st.integers(0, 2**32 - 1))
+def test_repairs_keep_the_mesh_valid_conforming_and_within_its_bounds(loops, size, bounded,
+                                                                    window, seed):
+    m, X, tri, _ = _jittered(loops, size, seed)
+    X0, tri0, q0 = X.copy(), tri.copy(), O.radius_ratio_reference(X, tri)
+    area0 = _areas(X, tri)
+    # a bound every triangle meets now, some just: new triangles must keep it
+    limit = np.full(len(tri), area0.max() * (1.0 + 1e-9) if bounded else np.inf)
+    counts = (len(tri) * (1 - window), len(tri) * (1 + window))
+    Y, t, old, ops = _repair(X, tri, m.segments, m.n_boundary, limit, counts=counts)
+    np.testing.assert_array_equal(X, X0)  # the inputs are not touched
+    np.testing.assert_array_equal(tri, tri0)
+    O.check_valid(Y, t)
+    O.check_conforming(Y, t, m.segments, area=m.domain.area, rel=1e-9)
+    np.testing.assert_array_equal(Y[: m.n_boundary], X0[: m.n_boundary])
+    assert len(old) == len(Y) and old.max() < len(X0)
+    kept = old >= 0  # old nodes keep their order, inserted ones (-1) come last
+    assert np.all(np.diff(old[kept]) > 0) and np.all(kept[: kept.sum()])
+    np.testing.assert_array_equal(old[: m.n_boundary], np.arange(m.n_boundary))
+    q = O.radius_ratio_reference(Y, t)
+    if ops:  # every kept variant lifts the worst of what it changed, never the mean down
+        assert q.min() >= q0.min() * (1 - 1e-12)
+        assert q.mean() >= q0.mean() * (1 - 1e-12)
+        assert len(t) != len(tri0) or not np.array_equal(Y, X0)
+    else:
+        np.testing.assert_array_equal(Y, X0)
+        np.testing.assert_array_equal(t, tri0)
+    assert np.all(_areas(Y, t) <= limit[0] * (1 + 1e-12))
+    low, high = counts
+    assert low <= len(t) <= high  # it started inside the window: it stays inside
+    again = _repair(X, tri, m.segments, m.n_boundary, limit, counts=counts)
+    for a, b in zip((Y, t, old), again[:3]):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_a_node_put_into_a_perfect_lattice_is_taken_out():
+    """A node at the centroid of an equilateral triangle of a lattice makes
+    three triangles with a 120-degree apex (ratio 8 sin(60) sin^2(15) =
+    0.464): the repair must remove it and give back the lattice, every ratio
+    1, every interior valence 6."""
+    X, tri, segments, n_b = _lattice_patch(4)
+    inner = np.arange(len(X)) >= n_b
+    t = next(t for t in range(len(tri)) if inner[tri[t]].all())
+    a, b, c = tri[t]
+    X = np.vstack([X, X[tri[t]].mean(axis=0)])
+    n = len(X) - 1
+    tri = np.vstack([np.delete(tri, t, axis=0), [(a, b, n), (b, c, n), (c, a, n)]])
+    apex = math.radians(120)
+    assert np.isclose(O.radius_ratio_reference(X, tri).min(),
+                      8 * math.sin(apex / 2) * math.sin((math.pi - apex) / 4) ** 2)
+    Y, t, old, ops = _repair(X, tri, segments, n_b, np.full(len(tri), np.inf))
+    assert ops >= 1
+    assert len(Y) == len(X) - 1 and len(t) == len(tri) - 2
+    np.testing.assert_allclose(O.radius_ratio_reference(Y, t), 1.0, atol=1e-9)
+    valence = np.bincount(t.ravel(), minlength=len(Y))
+    assert np.all(valence[n_b:] == 6)
+    O.check_valid(Y, t)
+
+
+def _strip(length, height):
+    """A rectangle [0, length] x [0, height] with nodes at unit spacing on its
+    long sides (the top ones half a step along) and none inside: a gap one
+    row of triangles high."""
+    bottom = [(float(x), 0.0) for x in range(length + 1)]
+    top = [(length - 0.5 - k, height) for k in range(length)]
+    corners = bottom + [(float(length), height)] + top + [(0.0, height)]
+    return bm.Domain.from_loops([np.array(corners)])
+
+
+@pytest.mark.parametrize("height", [2.0, 2.4, 3.0])
+def test_a_gap_one_row_high_gets_nodes(height):
+    """One row of triangles from wall to wall, too tall for its unit base
+    (ratio 0.74 at height 2): inserted nodes must lift the worst triangle
+    while the walls stay as they are."""
+    domain = _strip(8, height)
+    P = np.asarray(domain.points)
+    tri, _ = bm.constrained_delaunay(P, domain.segments)
+    q0 = O.radius_ratio_reference(P, tri)
+    Y, t, old, ops = _repair(P, np.asarray(tri), np.asarray(domain.segments), len(P),
+                                np.full(len(tri), np.inf))
+    assert ops >= 1 and len(Y) > len(P)
+    q = O.radius_ratio_reference(Y, t)
+    assert q.min() > q0.min() and q.mean() >= q0.mean()
+    np.testing.assert_array_equal(Y[: len(P)], P)
+    O.check_valid(Y, t)
+    O.check_conforming(Y, t, domain.segments, area=8 * height, rel=1e-12)
+
+
+def test_the_count_window_holds_the_count():
+    """Without room in the count window nothing is inserted: the gap keeps
+    its one row."""
+    domain = _strip(8, 2.0)
+    P = np.asarray(domain.points)
+    tri, _ = bm.constrained_delaunay(P, domain.segments)
+    Y, t, _, ops = _repair(P, np.asarray(tri), np.asarray(domain.segments), len(P),
+                           np.full(len(tri), np.inf), counts=(0, len(tri)))
+    assert ops == 0 and len(t) == len(tri)
+
+
+def test_bm_mesh_repairs_a_hole_close_to_a_wall(monkeypatch):
+    """A hole a little more than one element from a wall: bm.mesh's last step
+    must leave a better smallest ratio than the mesh without it, no lower a
+    mean, a count within the window of the field's own, and a valid,
+    conforming mesh."""
+    outer = np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float)
+    hole = np.array([(0.3, 0.11), (0.7, 0.11), (0.7, 0.6), (0.3, 0.6)], float)
+    domain = bm.Domain.from_loops([outer, hole[::-1]])
+    meshes = []
+    for ops in (0, pipeline.REPAIR_OPS):
+        monkeypatch.setattr(pipeline, "REPAIR_OPS", ops)
+        meshes.append(bm.mesh(domain, size=0.08, insertion="centroid"))
+    plain, repaired = meshes
+    assert repaired.optimization.repairs >= 1
+    q0 = O.radius_ratio_reference(plain.points, plain.triangles)
+    q = O.radius_ratio_reference(repaired.points, repaired.triangles)
+    assert q.min() > q0.min() and q.mean() >= q0.mean() * (1 - 1e-12)
+    O.check_valid(repaired.points, repaired.triangles, repaired.neighbors)
+    O.check_conforming(repaired.points, repaired.triangles, repaired.segments,
+                       area=domain.area, rel=1e-9)
+    field = SizeField.from_domain(domain, size=0.08)
+    asked = field_count(field, repaired.points, repaired.triangles)
+    assert abs(len(q) / asked - 1) <= pipeline.REPAIR_WINDOW or abs(
+        len(q) - asked) <= abs(len(q0) - asked)
+    assert len(repaired.radii) == len(repaired.points) and np.all(repaired.radii > 0)
+    assert repaired.optimization.repair_nodes == len(repaired.points) - len(plain.points)
