@@ -262,6 +262,10 @@ def run_triangle(mesh, hole_points, count):
     return out["vertices"], out["triangles"]
 
 
+# a peer's count is matched this closely where its steps allow (the issue's targets
+# allow 3%; on small meshes Gmsh's mean moves by 0.005 within that band)
+COUNT_MATCH = 0.01
+
 # Gmsh's Laplacian smoothing steps after meshing (its default is 1; more lifts its
 # mean radius ratio by up to 0.005 on the table's domains: the stronger peer)
 GMSH_SMOOTHING = 10
@@ -284,15 +288,15 @@ def run_gmsh_uniform(mesh, size, count, algorithm=6):
 
 
 def _tuned(count, run):
-    """The run(scale) -> (points, triangles, seconds) whose count is within 3%
-    of ``count`` (else the closest of 12): scale by the square root of the
-    count's ratio, bisecting once the target is bracketed."""
+    """The run(scale) -> (points, triangles, seconds) whose count is within
+    COUNT_MATCH of ``count`` (else the closest of 12): scale by the square
+    root of the count's ratio, bisecting once the target is bracketed."""
     scale, low, high, best = 1.0, 0.0, math.inf, None
     for _ in range(12):
         pts, tri, seconds = run(scale)
         if best is None or abs(len(tri) - count) < abs(len(best[1]) - count):
             best = (pts, tri, seconds)
-        if abs(len(tri) - count) < 0.03 * count:
+        if abs(len(tri) - count) <= COUNT_MATCH * count:
             break
         # more elements than asked: a larger scale; bisect once bracketed
         if len(tri) > count:
