@@ -9,9 +9,9 @@ below 0.7 is this population defect.  So, worst triangle first:
 
 - the *patch* is the triangles touching the worst triangle's corners (for
   the pair move, also those of a neighbour across an interior edge);
-- variants: one point inserted (the triangle's circumcentre, centroid or an
-  edge midpoint), two points inserted (the centroids of it and of a
-  neighbour), or one of its free nodes removed; the patch is re-triangulated
+- variants: one point inserted (an edge's midpoint), two points inserted
+  (the centroids of it and of a neighbour), or one of its free nodes
+  removed; the patch is re-triangulated
   constrained-Delaunay (:func:`~bubblemesh.triangulation.constrained_delaunay`,
   exact predicates) inside its own outline, which is kept edge for edge, so
   the mesh stays conforming and boundary nodes never move;
@@ -29,13 +29,14 @@ the WORST worst triangles pays, or after ``rounds``.  Every round is
 deterministic (ties broken by index)."""
 
 import numpy as np
+from numba import njit
 
-from ._odt import mean_polish
-from ._smoothing import compass_polish, stars, triangle_quality
+from ._odt import _mean_visit
+from ._smoothing import compass_polish, star_buffer, stars, triangle_quality
 from .errors import GeometryError
 from .triangulation import constrained_delaunay
 
-WORST = 4  # triangles tried per round, worst first
+WORST = 2  # triangles tried per round, worst first
 RISE = 1e-9  # a smaller rise of the smallest ratio is rounding, not a repair
 MEAN_DROP = 0.0  # a variant may lower the mesh's mean ratio by at most this
 COMPASS_ROUNDS = 3
@@ -100,26 +101,15 @@ def _patch(ptr, idx, nodes):
 
 def _variants(X, T, N_of, t, free):
     """(patch corner nodes, added points, removed node) of each variant for
-    triangle t: one point, a pair with each neighbour, one node removed."""
+    triangle t: an edge's midpoint, the centroids of t and of a neighbour, or
+    one of its free corners removed."""
     tri = T[t]
     p = X[tri]
-    out = [(tri, [a], -1) for a in [_circumcentre(p), p.mean(axis=0)]
-           + [0.5 * (p[k] + p[(k + 1) % 3]) for k in range(3)]]
+    out = [(tri, [0.5 * (p[k] + p[(k + 1) % 3])], -1) for k in range(3)]
     for u in N_of(t):
         out.append((np.concatenate([tri, T[u]]), [p.mean(axis=0), X[T[u]].mean(axis=0)], -1))
     out += [(tri, [], int(v)) for v in tri if free[v]]
     return out
-
-
-def _circumcentre(p):
-    """Circumcentre of the triangle with corners p (3, 2); the centroid if it
-    is degenerate."""
-    (bx, by), (cx, cy) = p[1] - p[0], p[2] - p[0]
-    d = 2.0 * (bx * cy - by * cx)
-    if d == 0.0:
-        return p.mean(axis=0)
-    b2, c2 = bx * bx + by * by, cx * cx + cy * cy
-    return p[0] + np.array([(cy * b2 - by * c2) / d, (bx * c2 - cx * b2) / d])
 
 
 def _allowed(m, grown, counts):
@@ -239,8 +229,7 @@ def _relax(X, T, q, ptr, idx, patch, made, added, free, limit, halvings, steps):
         if not compass_polish(Xl, Tl, lptr, lidx, 0, 1.0, mov, 2.0):
             break
     ql = triangle_quality(Xl, Tl)
-    mean_polish(Xl, Tl, lptr, lidx, 0, POLISH_SWEEPS, mov, float(ql.min()), halvings, 1.0,
-                steps)
+    _mean_sweeps(Xl, Tl, lptr, lidx, mov, float(ql.min()), halvings, steps, POLISH_SWEEPS)
     ql = triangle_quality(Xl, Tl)
     low = float(ql.min())
     if low <= before + RISE:
@@ -250,6 +239,21 @@ def _relax(X, T, q, ptr, idx, patch, made, added, free, limit, halvings, steps):
         return None
     gain = float(ql.sum()) - float(q[old].sum()) - float(q[patch].sum())
     return low, gain, nodes[mov], Xl[mov]
+
+
+@njit(cache=True)
+def _mean_sweeps(X, T, ptr, idx, movable, floor, halvings, steps, sweeps):
+    """Gradient steps on the star means of the ``movable`` nodes, in index
+    order (mean_polish's visit without its colouring and threads, which cost
+    more than the few nodes of a patch), at most ``sweeps`` sweeps; X in place."""
+    buf = np.empty((star_buffer(ptr).shape[0], 5))
+    for _ in range(sweeps):
+        moved = 0
+        for i in range(X.shape[0]):
+            if movable[i]:
+                moved += _mean_visit(X, T, ptr, idx, i, buf, floor, halvings, 1.0, steps)
+        if moved == 0:
+            break
 
 
 def _doubled_areas(X, T):
