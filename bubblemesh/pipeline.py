@@ -86,7 +86,6 @@ from ._verlet import VerletLists
 from .domain import Domain
 from .errors import GeometryError, MeshingError
 from .generation import generate_sized, refuse_beyond_memory
-from .quality import radius_ratio
 from .refinement import refine_boundary
 from .sizing import _EQUILATERAL_RADIUS, SizeField, as_size_function, field_count
 from .timing import PhaseClock
@@ -738,7 +737,7 @@ def _relaxed(mesh, max_area):
         if (_areas(X, T) > limit).any():
             X = settled
     stats = replace(stats, flips=stats.flips + flips,
-                    min_ratio=float(radius_ratio(X, T).min(initial=1.0)))
+                    min_ratio=float(triangle_quality(X, T).min(initial=1.0)))
     return replace(mesh, points=X, triangles=T, neighbors=N, optimization=stats)
 
 
@@ -768,7 +767,7 @@ def _repaired(mesh, max_area, field):
     radii = np.where(old >= 0, np.asarray(mesh.radii)[np.maximum(old, 0)],
                      _half_mean_edge(X, T))
     stats = replace(mesh.optimization, repairs=repairs, repair_nodes=len(X) - n,
-                    min_ratio=float(radius_ratio(X, T).min(initial=1.0)))
+                    min_ratio=float(triangle_quality(X, T).min(initial=1.0)))
     return replace(mesh, points=X, triangles=T, neighbors=N, radii=radii, optimization=stats)
 
 
