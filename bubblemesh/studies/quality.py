@@ -5,7 +5,7 @@ Frontal-Delaunay (Mesh.Algorithm=6) on the same input at matched element counts.
                                          [--random N [--seed S]] [--timings]
 
 Gmsh and Triangle get bm's refined boundary nodes; Gmsh also bm's size field
-(scaled until the counts match within 3%).  ``--data``: a folder with
+(scaled until the counts match within 1%).  ``--data``: a folder with
 Triangle's example A.poly and double_hex3.poly (skipped if absent); ``--big``
 adds the benchmark's 100k-element uniform disk (Gmsh with its own constant
 size).  Prints, per case and mesher, the element count and its ratio to the
@@ -262,8 +262,8 @@ def run_triangle(mesh, hole_points, count):
     return out["vertices"], out["triangles"]
 
 
-# a peer's count is matched this closely where its steps allow (the issue's targets
-# allow 3%; on small meshes Gmsh's mean moves by 0.005 within that band)
+# a peer's count is matched this closely where its steps allow: on small meshes its
+# mean moves with the count
 COUNT_MATCH = 0.01
 
 # Gmsh's Laplacian smoothing steps after meshing (its default is 1; more lifts its
@@ -275,7 +275,7 @@ def run_gmsh(mesh, field, count, algorithm=6):
     """Gmsh (Frontal-Delaunay by default, GMSH_SMOOTHING smoothing steps) on
     bm's refined boundary nodes, no further boundary splits, sizes from bm's
     size field (a Python callback) times a factor tuned until the element
-    count is within 3% of count (else the closest of 12 runs).  Returns
+    count is within COUNT_MATCH of count (else the closest of 12 runs).  Returns
     (points, triangles, seconds of that run)."""
     return _tuned(count, lambda scale: _gmsh_once(mesh, field, scale, algorithm))
 

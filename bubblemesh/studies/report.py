@@ -331,7 +331,7 @@ def _quality_vs_gmsh(out: Path):
             ("p", "`bm.mesh` (defaults; corner-only inputs with max_area = area / 200) against "
                   f"Gmsh's Frontal-Delaunay (algorithm 6 with {GMSH_SMOOTHING} smoothing steps, "
                   "on bm's refined boundary nodes and its "
-                  "size field, scaled until the counts match within 3% or the closest of 12 "
+                  "size field, scaled until the counts match within 1% or the closest of 12 "
                   "runs; on the uniform disk Gmsh's own constant size) and Triangle -pq30 "
                   "(area bound tuned to the count), from "
                   f"`python -m bubblemesh.studies.quality --big --out {out}`, which the "
