@@ -31,6 +31,7 @@ deterministic (ties broken by index)."""
 import numpy as np
 from numba import njit
 
+from ._area_bound import _areas
 from ._odt import _mean_visit
 from ._smoothing import compass_polish, star_buffer, stars, triangle_quality
 from .errors import GeometryError
@@ -235,7 +236,7 @@ def _relax(X, T, q, ptr, idx, patch, made, added, free, limit, halvings, steps):
     if low <= before + RISE:
         return None
     bound = np.concatenate([limit[old], np.full(len(made), limit[patch].min())])
-    if (_doubled_areas(Xl, Tl) > 2.0 * bound).any():
+    if (_areas(Xl, Tl) > bound).any():
         return None
     gain = float(ql.sum()) - float(q[old].sum()) - float(q[patch].sum())
     return low, gain, nodes[mov], Xl[mov]
@@ -254,12 +255,6 @@ def _mean_sweeps(X, T, ptr, idx, movable, floor, halvings, steps, sweeps):
                 moved += _mean_visit(X, T, ptr, idx, i, buf, floor, halvings, 1.0, steps)
         if moved == 0:
             break
-
-
-def _doubled_areas(X, T):
-    """Twice the signed area of each triangle."""
-    a, b, c = X[T[:, 0]], X[T[:, 1]], X[T[:, 2]]
-    return (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
 
 
 def _apply(X, T, limit, free, alive, old, best):

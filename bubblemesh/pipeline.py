@@ -58,7 +58,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ._area_bound import FILL, _areas, bound_areas, triangle_limits
+from ._area_bound import FILL, _areas, _walled, bound_areas, triangle_limits
 from ._area_bound import MARGIN as AREA_MARGIN
 from ._coincident import shared_positions
 from ._corners import split_corners
@@ -746,8 +746,8 @@ def _repaired(mesh, max_area, field):
     re-triangulated with a node inserted or removed where that raises their
     smallest ratio (:mod:`bubblemesh._patch_repair`), within the area bounds,
     the element count within REPAIR_WINDOW of the count ``field`` asks for
-    (:func:`~bubblemesh.sizing.field_count`) or brought closer to it; per-node
-    data of an inserted node from its nearest corner."""
+    (:func:`~bubblemesh.sizing.field_count`) or brought closer to it; an
+    inserted node's radius is half its mean edge (as the area bound's)."""
     X, T, N = mesh.points, mesh.triangles, mesh.neighbors
     if not REPAIR_OPS or triangle_quality(X, T).min(initial=1.0) >= REPAIR_BELOW:
         return mesh
@@ -763,7 +763,7 @@ def _repaired(mesh, max_area, field):
                                       counts, MEAN_HALVINGS, MEAN_STEPS)
     if not repairs:
         return mesh
-    N = _walled_neighbors(T, segments, len(X))
+    N = _walled(T, neighbors_of(T), segments, len(X))
     radii = np.where(old >= 0, np.asarray(mesh.radii)[np.maximum(old, 0)],
                      _half_mean_edge(X, T))
     stats = replace(mesh.optimization, repairs=repairs, repair_nodes=len(X) - n,
@@ -778,17 +778,6 @@ def _smallest_ratio(X, T):
     q = triangle_quality(X, T)
     near = q <= q.min(initial=1.0) + 1e-9
     return float(radius_ratio(X, T[near]).min(initial=1.0))
-
-
-def _walled_neighbors(T, segments, n):
-    """Neighbours of T with -1 across every segment (the boundary and the
-    interfaces)."""
-    N = neighbors_of(T)
-    a, b = T[:, [1, 2, 0]], T[:, [2, 0, 1]]
-    key = np.minimum(a, b) * n + np.maximum(a, b)
-    walls = np.minimum(segments[:, 0], segments[:, 1]) * n + np.maximum(segments[:, 0],
-                                                                         segments[:, 1])
-    return np.where(np.isin(key, walls), -1, N)
 
 
 def _insertion(mesh):

@@ -317,7 +317,7 @@ def _quality_vs_gmsh(out: Path):
     quality_vs_gmsh.csv ([] when absent), with the project's targets met."""
     import pandas as pd
 
-    from .quality import GMSH_SMOOTHING, target_summary
+    from .quality import COUNT_MATCH, GMSH_SMOOTHING, target_summary
 
     csv = out / "quality_vs_gmsh.csv"
     if not csv.exists():
@@ -331,7 +331,8 @@ def _quality_vs_gmsh(out: Path):
             ("p", "`bm.mesh` (defaults; corner-only inputs with max_area = area / 200) against "
                   f"Gmsh's Frontal-Delaunay (algorithm 6 with {GMSH_SMOOTHING} smoothing steps, "
                   "on bm's refined boundary nodes and its "
-                  "size field, scaled until the counts match within 1% or the closest of 12 "
+                  f"size field, scaled until the counts match within {COUNT_MATCH:.0%} or "
+                  "the closest of 12 "
                   "runs; on the uniform disk Gmsh's own constant size) and Triangle -pq30 "
                   "(area bound tuned to the count), from "
                   f"`python -m bubblemesh.studies.quality --big --out {out}`, which the "
