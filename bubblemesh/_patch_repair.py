@@ -42,6 +42,7 @@ RISE = 1e-9  # a smaller rise of the smallest ratio is rounding, not a repair
 MEAN_DROP = 0.0  # a variant may lower the mesh's mean ratio by at most this
 COMPASS_ROUNDS = 3
 POLISH_SWEEPS = 3
+CANDIDATES = 8  # nodes (triangles: a quarter) tried per round by balance_count
 
 
 def repair_worst(X, T, segments, movable, limit, below, rounds, counts, halvings, steps):
@@ -53,6 +54,52 @@ def repair_worst(X, T, segments, movable, limit, below, rounds, counts, halvings
     the new arrays, with the removed nodes gone and the inserted ones after
     the old (node numbers below the first removed one unchanged), ``old``
     each node's number in X (-1: inserted) and the number of variants kept."""
+    def pick(X, T, q, ptr, idx, free, limit, walls):
+        for t in _worst(q, below):
+            best = _best_variant(X, T, q, ptr, idx, int(t), free, limit, walls, halvings,
+                                 steps, counts)
+            if best is not None:
+                return best
+        return None
+
+    return _rounds(X, T, segments, movable, limit, rounds, pick)
+
+
+def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings, steps):
+    """While the element count is above ``counts`` (low, high), remove the
+    free node whose star is most crowded for the size field (smallest summed
+    area over the areas ``size`` asks for) that can go; while it is below,
+    insert a point in the sparsest triangle (an edge midpoint or its
+    centroid).  Of the CANDIDATES tried per round the variant with the
+    highest smallest ratio of its changed triangles (then mesh mean) is kept
+    if that ratio is not below the mesh's minimum and the area bounds hold.
+    ``size`` maps (k, 2) points to (k,) sizes; the rest and the result as
+    :func:`repair_worst`."""
+    def pick(X, T, q, ptr, idx, free, limit, walls):
+        m = len(T)
+        if counts[0] <= m <= counts[1]:
+            return None
+        fill = _areas(X, T) / np.asarray(size(X[T].mean(axis=1)), np.float64) ** 2
+        floor = float(q.min(initial=1.0))
+        if m > counts[1]:
+            crowd = np.bincount(T.ravel(), np.repeat(fill, 3), len(X))
+            crowd[~free] = np.inf
+            order = np.lexsort((np.arange(len(X)), crowd))[:CANDIDATES]
+            tries = [(np.unique(T[idx[ptr[v]:ptr[v + 1]]]), [], int(v))
+                     for v in order if np.isfinite(crowd[v])]
+        else:
+            order = np.lexsort((np.arange(m), -fill))[:CANDIDATES // 4]
+            tries = [(T[t], [point], -1) for t in order for point in
+                     [X[T[t]].mean(axis=0)] + [0.5 * (X[T[t, k]] + X[T[t, (k + 1) % 3]])
+                                               for k in range(3)]]
+        return _best_of(X, T, q, ptr, idx, tries, free, limit, walls, halvings, steps,
+                        floor, None)
+
+    return _rounds(X, T, segments, movable, limit, rounds, pick)
+
+
+def _rounds(X, T, segments, movable, limit, rounds, pick):
+    """At most ``rounds`` variants chosen by ``pick`` applied in turn."""
     X, T, limit = np.array(X, np.float64), np.array(T, np.int64), np.array(limit, np.float64)
     free = np.array(movable, np.bool_)
     alive = np.ones(len(X), np.bool_)
@@ -61,19 +108,12 @@ def repair_worst(X, T, segments, movable, limit, below, rounds, counts, halvings
     operations = 0
     for _ in range(rounds):
         q = triangle_quality(X, T)
-        worst = _worst(q, below)
-        if not len(worst):
-            break
         ptr, idx = stars(T, len(X))
-        for t in worst:
-            best = _best_variant(X, T, q, ptr, idx, int(t), free, limit, walls, halvings,
-                                 steps, counts)
-            if best is not None:
-                X, T, limit, free, alive, old = _apply(X, T, limit, free, alive, old, best)
-                operations += 1
-                break
-        else:
+        best = pick(X, T, q, ptr, idx, free, limit, walls)
+        if best is None:
             break
+        X, T, limit, free, alive, old = _apply(X, T, limit, free, alive, old, best)
+        operations += 1
     new_id = np.cumsum(alive) - 1
     return X[alive], new_id[T], old[alive], operations
 
@@ -128,22 +168,34 @@ def _best_variant(X, T, q, ptr, idx, t, free, limit, walls, halvings, steps, cou
     def across(s):
         return _edge_neighbours(T, ptr, idx, s, walls)
 
+    m = len(T)
+    tries = [(corners, added, removed) for corners, added, removed
+             in _variants(X, T, across, t, free)
+             if _allowed(m, m + 2 * len(added) - (2 if removed >= 0 else 0), counts)]
+    return _best_of(X, T, q, ptr, idx, tries, free, limit, walls, halvings, steps, None,
+                    float(q.sum()) / m - MEAN_DROP)
+
+
+def _best_of(X, T, q, ptr, idx, tries, free, limit, walls, halvings, steps, floor, mean):
+    """The best of the variants ``tries`` (patch corner nodes, added points,
+    removed node) by (smallest ratio of the changed triangles, mesh mean):
+    each must raise that smallest ratio (``floor`` None) or keep it at least
+    ``floor``, keep every area bound and leave a mesh mean of at least
+    ``mean`` (None: any)."""
     best, total, m = None, float(q.sum()), len(T)
-    for corners, added, removed in _variants(X, T, across, t, free):
+    for corners, added, removed in tries:
         growth = 2 * len(added) - (2 if removed >= 0 else 0)
-        if not _allowed(m, m + growth, counts):
-            continue
         patch = _patch(ptr, idx, corners)
         made = _retriangulate(X, T, patch, added, removed, walls)
         if made is None:
             continue
         tried = _relax(X, T, q, ptr, idx, patch, made, np.asarray(added).reshape(-1, 2), free,
-                       limit, halvings, steps)
+                       limit, halvings, steps, floor)
         if tried is None:
             continue
         low, gain, nodes, positions = tried
         score = (low, (total + gain) / (m + growth))
-        if score[1] < total / m - MEAN_DROP:
+        if mean is not None and score[1] < mean:
             continue
         if best is None or score > best[-1]:
             best = (patch, made, np.asarray(added).reshape(-1, 2), removed, nodes, positions,
@@ -206,11 +258,13 @@ def _retriangulate(X, T, patch, added, removed, walls):
     return made
 
 
-def _relax(X, T, q, ptr, idx, patch, made, added, free, limit, halvings, steps):
+def _relax(X, T, q, ptr, idx, patch, made, added, free, limit, halvings, steps,
+           floor=None):
     """Relax the free nodes of ``made`` (the patch's new triangles) and
     their neighbours on a copy; (smallest ratio of the changed triangles,
     change of the summed ratio, relaxed global nodes, their positions), or
-    None if the smallest ratio does not rise or an area bound breaks."""
+    None if the smallest ratio does not rise (is below ``floor``, if given)
+    or an area bound breaks."""
     n = len(X)
     ring = np.unique(made)
     outside = np.setdiff1d(np.unique(np.concatenate([idx[ptr[v]:ptr[v + 1]]
@@ -233,7 +287,7 @@ def _relax(X, T, q, ptr, idx, patch, made, added, free, limit, halvings, steps):
     _mean_sweeps(Xl, Tl, lptr, lidx, mov, float(ql.min()), halvings, steps, POLISH_SWEEPS)
     ql = triangle_quality(Xl, Tl)
     low = float(ql.min())
-    if low <= before + RISE:
+    if (low <= before + RISE) if floor is None else (low < floor):
         return None
     bound = np.concatenate([limit[old], np.full(len(made), limit[patch].min())])
     if (_areas(Xl, Tl) > bound).any():

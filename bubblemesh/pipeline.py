@@ -76,7 +76,7 @@ from ._inside import boundary_clearance
 from ._lattice import lattice_points
 from ._mesh import GenerationStats, Mesh, OptimizationStats, _half_mean_edge
 from ._odt import mean_polish, odt_smooth
-from ._patch_repair import repair_worst
+from ._patch_repair import balance_count, repair_worst
 from ._relaxed_flips import relaxed_flips
 from ._rings import node_adjacency, ring_neighbors, vertex_triangles
 from ._seeds import frontal_seeds, inside
@@ -129,6 +129,9 @@ RELAXED_POLISH = 3  # then mean-ratio sweeps over the nodes they changed and the
 REPAIR_BELOW = 0.9  # patches around triangles below this ratio are re-triangulated
 REPAIR_OPS = 16  # at most this many of them
 REPAIR_WINDOW = 0.035  # they keep the element count this close to the field's (or bring it closer)
+BALANCE_WINDOW = 0.03  # a count further off the field's gets nodes removed or inserted
+BALANCE_OPS = 16  # at most this many
+BALANCE_BELOW = 20_000  # and only in meshes this small (in larger, 16 nodes are < 0.2%)
 BOTH_BELOW, BOTH_COUNT = 5000, 0.03  # both insertions up to this many elements (auto)
 COUNT_TOL = 0.05  # a count this close to the size field's fits it
 UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
@@ -742,31 +745,54 @@ def _relaxed(mesh, max_area):
 
 
 def _repaired(mesh, max_area, field):
-    """The very last step: the patches around the worst triangles
-    re-triangulated with a node inserted or removed where that raises their
-    smallest ratio (:mod:`bubblemesh._patch_repair`), within the area bounds,
-    the element count within REPAIR_WINDOW of the count ``field`` asks for
-    (:func:`~bubblemesh.sizing.field_count`) or brought closer to it; an
-    inserted node's radius is half its mean edge (as the area bound's)."""
-    X, T, N = mesh.points, mesh.triangles, mesh.neighbors
-    if not REPAIR_OPS or triangle_quality(X, T).min(initial=1.0) >= REPAIR_BELOW:
+    """The very last step (:mod:`bubblemesh._patch_repair`): in a mesh of at
+    most BALANCE_BELOW elements, while the element count is more than
+    BALANCE_WINDOW off the count ``field`` asks for
+    (:func:`~bubblemesh.sizing.field_count`) and BALANCE_OPS nodes can bring
+    it into that window, a node removed where the
+    mesh is most crowded (inserted where it is sparsest) without lowering its
+    minimum; then the patches around the worst triangles re-triangulated with
+    a node inserted or removed where that raises their smallest ratio, the
+    count within REPAIR_WINDOW of the field's or brought closer to it; both
+    within the area bounds.  An inserted node's radius is half its mean edge
+    (as the area bound's)."""
+    X, T = mesh.points, mesh.triangles
+    poor = REPAIR_OPS and triangle_quality(X, T).min(initial=1.0) < REPAIR_BELOW
+    if not poor and len(T) > BALANCE_BELOW:
+        return mesh
+    asked = field_count(field, X, T)
+    miss = abs(len(T) - min(max(len(T), asked * (1.0 - BALANCE_WINDOW)),
+                            asked * (1.0 + BALANCE_WINDOW)))
+    off = 0 < miss <= 2 * BALANCE_OPS  # beyond, BALANCE_OPS nodes cannot mend it
+    if not off and not poor:
         return mesh
     segments = np.asarray(mesh.segments)
-    movable = np.arange(len(X)) >= mesh.n_boundary
-    movable[np.unique(segments)] = False
     regions = getattr(mesh.domain, "regions", None)
-    limit = triangle_limits(X, T, N, regions, max_area) / (1.0 + AREA_MARGIN)
-    asked = field_count(field, X, T)
-    counts = (asked * (1.0 - REPAIR_WINDOW), asked * (1.0 + REPAIR_WINDOW))
-    n = len(X)
-    X, T, old, repairs = repair_worst(X, T, segments, movable, limit, REPAIR_BELOW, REPAIR_OPS,
-                                      counts, MEAN_HALVINGS, MEAN_STEPS)
-    if not repairs:
+    n, N, old, operations = len(X), mesh.neighbors, np.arange(len(X)), 0
+
+    def run(step, *args):  # boundary nodes stay first: only free nodes are removed
+        nonlocal X, T, N, old, operations
+        movable = np.arange(len(X)) >= mesh.n_boundary
+        movable[np.unique(segments)] = False
+        limit = triangle_limits(X, T, N, regions, max_area) / (1.0 + AREA_MARGIN)
+        X, T, now, taken = step(X, T, segments, movable, limit, *args, MEAN_HALVINGS,
+                                MEAN_STEPS)
+        old = np.where(now >= 0, old[np.maximum(now, 0)], -1)
+        operations += taken
+        if taken:
+            N = _walled(T, neighbors_of(T), segments, len(X))
+
+    if off:
+        run(balance_count, (asked * (1.0 - BALANCE_WINDOW), asked * (1.0 + BALANCE_WINDOW)),
+            field, BALANCE_OPS)
+    if poor:
+        run(repair_worst, REPAIR_BELOW, REPAIR_OPS,
+            (asked * (1.0 - REPAIR_WINDOW), asked * (1.0 + REPAIR_WINDOW)))
+    if not operations:
         return mesh
-    N = _walled(T, neighbors_of(T), segments, len(X))
     radii = np.where(old >= 0, np.asarray(mesh.radii)[np.maximum(old, 0)],
                      _half_mean_edge(X, T))
-    stats = replace(mesh.optimization, repairs=repairs, repair_nodes=len(X) - n,
+    stats = replace(mesh.optimization, repairs=operations, repair_nodes=len(X) - n,
                     min_ratio=_smallest_ratio(X, T))
     return replace(mesh, points=X, triangles=T, neighbors=N, radii=radii, optimization=stats)
 

@@ -3,6 +3,9 @@ the last step of bm.mesh: validity, conformity, fixed boundary nodes, the
 smallest ratio strictly up and the mean not down with every kept variant, the
 area bounds and the count window, same bits on a second run; a node put into
 a perfect lattice taken out again, and a gap one triangle high given nodes.
+The count balance before it: the count moved two triangles per node toward
+its window and never past it, the minimum never lowered, the most crowded
+node the one removed.
 
 Oracles: verification/oracles.py (exact orientation and conformity, the radius
 ratio from the classical formulas), numpy areas and valence counts."""
@@ -21,7 +24,7 @@ from test_relaxed_flips import _areas, _jittered, _lattice_patch
 
 import bubblemesh as bm
 from bubblemesh import pipeline
-from bubblemesh._patch_repair import _retriangulate, repair_worst
+from bubblemesh._patch_repair import _retriangulate, balance_count, repair_worst
 from bubblemesh.sizing import SizeField, field_count
 
 HALVINGS, STEPS = 4, 3
@@ -128,11 +131,9 @@ def test_a_patch_is_refilled_only_inside_its_own_outline():
     assert _retriangulate(X, T, patch, [], 0, walls) is None
 
 
-def test_a_node_put_into_a_perfect_lattice_is_taken_out():
-    """A node at the centroid of an equilateral triangle of a lattice makes
-    three triangles with a 120-degree apex (ratio 8 sin(60) sin^2(15) =
-    0.464): the repair must remove it and give back the lattice, every ratio
-    1, every interior valence 6."""
+def _lattice_with_centroid_node():
+    """A lattice patch (4 rings) with a node n added at the centroid of its
+    first all-interior triangle, split in three: (X, tri, segments, n_b, n)."""
     X, tri, segments, n_b = _lattice_patch(4)
     inner = np.arange(len(X)) >= n_b
     t = next(t for t in range(len(tri)) if inner[tri[t]].all())
@@ -140,6 +141,15 @@ def test_a_node_put_into_a_perfect_lattice_is_taken_out():
     X = np.vstack([X, X[tri[t]].mean(axis=0)])
     n = len(X) - 1
     tri = np.vstack([np.delete(tri, t, axis=0), [(a, b, n), (b, c, n), (c, a, n)]])
+    return X, tri, segments, n_b, n
+
+
+def test_a_node_put_into_a_perfect_lattice_is_taken_out():
+    """A node at the centroid of an equilateral triangle of a lattice makes
+    three triangles with a 120-degree apex (ratio 8 sin(60) sin^2(15) =
+    0.464): the repair must remove it and give back the lattice, every ratio
+    1, every interior valence 6."""
+    X, tri, segments, n_b, n = _lattice_with_centroid_node()
     apex = math.radians(120)
     assert np.isclose(O.radius_ratio_reference(X, tri).min(),
                       8 * math.sin(apex / 2) * math.sin((math.pi - apex) / 4) ** 2)
@@ -218,3 +228,92 @@ def test_bm_mesh_repairs_a_hole_close_to_a_wall(monkeypatch):
         len(q) - asked) <= abs(len(q0) - asked)
     assert len(repaired.radii) == len(repaired.points) and np.all(repaired.radii > 0)
     assert repaired.optimization.repair_nodes == len(repaired.points) - len(plain.points)
+
+
+def _balance(X, tri, segments, n_b, limit, counts, size, rounds=6):
+    movable = np.arange(len(X)) >= n_b
+    movable[np.unique(segments)] = False
+    return balance_count(X, tri, segments, movable, limit, counts, size, rounds, HALVINGS,
+                         STEPS)
+
+
+def _uniform(h):
+    return lambda P: np.full(len(P), h)
+
+
+@given(corner_domains(max_holes=2), st.sampled_from([0.3, 0.2]), st.booleans(),
+       st.sampled_from([-1, 1]), st.integers(1, 12), st.integers(0, 2**32 - 1))
+def test_the_count_balance_moves_the_count_toward_its_window_and_keeps_the_minimum(
+        loops, size, bounded, sign, excess, seed):
+    """A window ``excess`` triangles below (sign -1: nodes must go) or above
+    (+1: nodes must come) the count: every operation moves the count by two
+    toward it, it stops inside it or when nothing can be done, the smallest
+    ratio never falls, and the mesh stays valid, conforming and bounded."""
+    m, X, tri, _ = _jittered(loops, size, seed)
+    X0, tri0, q0 = X.copy(), tri.copy(), O.radius_ratio_reference(X, tri)
+    limit = np.full(len(tri), _areas(X, tri).max() * (1.0 + 1e-9) if bounded else np.inf)
+    target = len(tri) + sign * excess
+    counts = (target, math.inf) if sign > 0 else (0, target)
+    Y, t, old, ops = _balance(X, tri, m.segments, m.n_boundary, limit, counts, _uniform(size))
+    np.testing.assert_array_equal(X, X0)
+    np.testing.assert_array_equal(tri, tri0)
+    O.check_valid(Y, t)
+    O.check_conforming(Y, t, m.segments, area=m.domain.area, rel=1e-9)
+    np.testing.assert_array_equal(Y[: m.n_boundary], X0[: m.n_boundary])
+    assert len(t) == len(tri0) + 2 * sign * ops and len(Y) == len(X0) + sign * ops
+    assert (old < 0).sum() == (ops if sign > 0 else 0)
+    needed = -(-excess // 2)  # two triangles per node
+    assert ops <= needed  # never past the window
+    q = O.radius_ratio_reference(Y, t)
+    assert q.min() >= q0.min() * (1 - 1e-12)
+    assert np.all(_areas(Y, t) <= limit[0] * (1 + 1e-12))
+    again = _balance(X, tri, m.segments, m.n_boundary, limit, counts, _uniform(size))
+    for a, b in zip((Y, t, old), again[:3]):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_the_count_balance_removes_the_most_crowded_node():
+    """A node at an equilateral lattice triangle's centroid crowds it (its
+    star is one lattice triangle): asked for two triangles fewer, the balance
+    removes that node and gives back the lattice, every ratio 1."""
+    X, tri, segments, n_b, n = _lattice_with_centroid_node()
+    Y, t, old, ops = _balance(X, tri, segments, n_b, np.full(len(tri), np.inf),
+                              (0, len(tri) - 2), _uniform(1.0))
+    assert ops == 1 and n not in old and len(t) == len(tri) - 2
+    np.testing.assert_allclose(O.radius_ratio_reference(Y, t), 1.0, atol=1e-9)
+
+
+def test_the_count_balance_fills_a_sparse_gap():
+    """A gap one row high has too few triangles for a unit size field: asked
+    for more, the balance inserts nodes without lowering the minimum."""
+    domain = _strip(8, 2.0)
+    P = np.asarray(domain.points)
+    tri, _ = bm.constrained_delaunay(P, domain.segments)
+    q0 = O.radius_ratio_reference(P, tri)
+    Y, t, old, ops = _balance(P, np.asarray(tri), np.asarray(domain.segments), len(P),
+                              np.full(len(tri), np.inf), (len(tri) + 4, math.inf),
+                              _uniform(1.0))
+    assert ops == 2 and len(t) == len(tri) + 4 and (old < 0).sum() == 2
+    assert O.radius_ratio_reference(Y, t).min() >= q0.min()
+    O.check_conforming(Y, t, domain.segments, area=16.0, rel=1e-12)
+
+
+def test_bm_meshes_count_is_balanced_to_the_field(monkeypatch):
+    """bm.mesh's last step given a field 8% coarser than the mesh was made
+    for: the count lands inside the window of the coarser field's count,
+    the minimum does not fall, the mesh stays valid and conforming."""
+    domain = bm.Domain.from_loops([np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float)])
+    monkeypatch.setattr(pipeline, "REPAIR_OPS", 0)
+    m = bm.mesh(domain, size=0.1)
+    coarser = SizeField.from_domain(domain, size=0.1 * 1.04)
+    out = pipeline._repaired(m, None, coarser)
+    asked = field_count(coarser, out.points, out.triangles)
+    assert len(m.triangles) > asked * (1 + pipeline.BALANCE_WINDOW)  # the test's premise
+    assert len(out.triangles) <= asked * (1 + pipeline.BALANCE_WINDOW)
+    q0 = O.radius_ratio_reference(m.points, m.triangles)
+    q = O.radius_ratio_reference(out.points, out.triangles)
+    assert q.min() >= q0.min() * (1 - 1e-12)
+    O.check_valid(out.points, out.triangles, out.neighbors)
+    O.check_conforming(out.points, out.triangles, out.segments, area=1.0, rel=1e-9)
+    assert out.optimization.repair_nodes == len(out.points) - len(m.points) < 0
+    assert len(out.radii) == len(out.points)
