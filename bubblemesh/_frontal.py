@@ -38,7 +38,8 @@ deterministic.
 
 import math
 
-from numba import njit
+import numpy as np
+from numba import njit, prange
 
 from ._cavity import fill_cavity, find_cavity, in_conflict
 from ._insertion import (
@@ -65,6 +66,7 @@ WALL_FIRST = 4.0  # heap keys of wall triangles drop by this: below every other 
 WALK_STEPS = 64  # a frontal node lies next to its triangle: a longer walk gives up
 CROWD = 0.35  # no new node closer than this times h to a neighbour
 SQRT3 = math.sqrt(3.0)
+KEY_BLOCK = 4096  # initial triangles keyed per parallel block
 
 
 @njit(cache=True, inline="always")
@@ -223,14 +225,24 @@ def _is_active(tri, nbr, density, t):
 def init_front(P, tri, nbr, ntri, r_e, density, keys, ids, acc, factor, field, stack, limits):
     """Bubbles and keys of the initial triangles, sum A_e, and the heap of the
     active ones.  Returns the heap size."""
-    for t in range(ntri):
-        density[t] = frontal_key(P, tri, nbr, t, r_e, factor, field, stack, limits)
+    _initial_keys(P, tri, nbr, ntri, r_e, density, factor, field, stack.shape[0], limits)
+    for t in range(ntri):  # in order: the same sum on any thread count
         _accumulate(acc, _bubble_area(r_e, t))
     size = 0
     for t in range(ntri):
         if _is_active(tri, nbr, density, t):
             size = heap_push(keys, ids, size, heap_key(nbr, density, t), t)
     return size
+
+
+@njit(cache=True, parallel=True)
+def _initial_keys(P, tri, nbr, ntri, r_e, density, factor, field, depth, limits):
+    """:func:`frontal_key` of each initial triangle, in blocks of KEY_BLOCK
+    with a field stack of ``depth`` each."""
+    for block in prange((ntri + KEY_BLOCK - 1) // KEY_BLOCK):
+        stack = np.empty(depth, np.int64)
+        for t in range(block * KEY_BLOCK, min(ntri, (block + 1) * KEY_BLOCK)):
+            density[t] = frontal_key(P, tri, nbr, t, r_e, factor, field, stack, limits)
 
 
 @njit(cache=True)
