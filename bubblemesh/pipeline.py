@@ -116,7 +116,8 @@ def _sharp_angle(target: float = 0.7) -> float:
 SHARP_ANGLE = _sharp_angle()  # ~27.2 degrees
 POOR = 0.875  # stars whose worst radius ratio is below this get the compass search
 KEEP = 0.8  # the settling passes may lower a star's worst ratio to max(mesh minimum, KEEP)
-ODT_ROUNDS, ODT_SWEEPS = 1, 2  # ODT passes, each followed by the CDT
+ODT_ROUNDS = {"centroid": 1, "frontal": 0}  # ODT passes, each followed by the CDT (the front
+ODT_SWEEPS = 2  # starts regular: its ODT pass bought 1e-5 of mean for a sixth of the run)
 FLIP_PASSES = 20
 MAX_SCALE = 1e12  # largest domain extent over the smallest size that bm.mesh takes
 MEAN_SWEEPS, MEAN_HALVINGS = 3, 4
@@ -362,7 +363,8 @@ def _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, 
 
         def settle(X, T, N, segments, n_b, movable):
             return _settle(X, T, N, segments, n_b, _node_sizes(mesh, X, field), movable,
-                           mean_below=MEAN_BELOW[gen.insertion])[:2]
+                           mean_below=MEAN_BELOW[gen.insertion],
+                           odt_rounds=ODT_ROUNDS[gen.insertion])[:2]
 
         # Triangle's -a, global and regional: hard bounds
         return _repaired(_relaxed(bound_areas(mesh, max_area, settle=settle), max_area),
@@ -585,19 +587,20 @@ def _node_sizes(mesh, X, size_field):
 
 
 def _settle(X, triangles, neighbors, segments, n_b, h, movable, star_of=None,
-            mean_below=1.0):
+            mean_below=1.0, odt_rounds=1):
     """Settle the nodes and the valences, never lowering the smallest radius
     ratio (each pass keeps every star at least min(its worst, max(mesh minimum,
-    KEEP)); X in place): ODT (:mod:`bubblemesh._odt`) alternating with the CDT,
-    then valence and quality flips (:mod:`bubblemesh._flips`; the mesh stays
-    valid and conforming but need not be constrained-Delaunay) and corner
+    KEEP)); X in place): ``odt_rounds`` of ODT (:mod:`bubblemesh._odt`), each
+    followed by the CDT, then valence and quality flips
+    (:mod:`bubblemesh._flips`; the mesh stays valid and conforming but need
+    not be constrained-Delaunay) and corner
     splits (:mod:`bubblemesh._corners`), then gradient steps on each star's
     mean ratio (a compass search where they are blocked) for the stars whose
     worst ratio is below ``mean_below``.  Returns (triangles, neighbors, moves,
     flips).  ``star_of``: a :class:`_Stars` from the smoothing."""
     star_of = star_of or _Stars()
     moves = 0
-    for _ in range(ODT_ROUNDS):
+    for _ in range(odt_rounds):
         floor = max(float(triangle_quality(X, triangles).min(initial=1.0)), KEEP)
         ptr, idx = star_of(triangles, len(X))
         taken, _ = odt_smooth(X, triangles, ptr, idx, h, n_b, ODT_SWEEPS, movable, floor, 1e-3)
@@ -651,7 +654,7 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
         clock.lap("smoothing")
         triangles, neighbors, settled, flips = _settle(
             X, triangles, neighbors, segments, n_b, _node_sizes(mesh, X, size_field), movable,
-            star_of, MEAN_BELOW[_insertion(mesh)])
+            star_of, MEAN_BELOW[_insertion(mesh)], ODT_ROUNDS[_insertion(mesh)])
         clock.lap("settling")
     fallback = "none"
     for _ in range(8):  # the guarantee: revert the nodes of triangles below q0
