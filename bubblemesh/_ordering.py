@@ -8,6 +8,8 @@ renumbering of the §2 mesh.
 import numpy as np
 from numba import njit, prange
 
+SMALL = 4096  # fewer keys are sorted by numpy (the radix sort's 65536 bins cost more)
+
 
 @njit(cache=True, parallel=True)
 def _hilbert_keys(P, bits):
@@ -67,4 +69,6 @@ def hilbert_order(points: np.ndarray) -> np.ndarray:
     if len(points) == 0:
         return np.zeros(0, np.int64)
     keys = _hilbert_keys(np.ascontiguousarray(points, dtype=np.float64), 16)
+    if len(keys) < SMALL:  # the same order: a stable sort of the same keys
+        return np.argsort(keys, kind="stable")
     return _radix_argsort(keys, 2)  # keys < 4**16

@@ -8,10 +8,14 @@ front puts a node in such a gap, and the paper's reason (2) for its elements
 below 0.7 is this population defect.  So, worst triangle first:
 
 - the *patch* is the triangles touching the worst triangle's corners (for
-  the pair move, also those of a neighbour across an interior edge);
-- variants: one point inserted (an edge's midpoint), two points inserted
-  (the centroids of it and of a neighbour), or one of its free nodes
-  removed; the patch is re-triangulated
+  the two-point variants, also those of its neighbours across its interior
+  edges);
+- variants: one point inserted (an edge's midpoint); two points inserted
+  (the centroids of it and a neighbour; two apexes of the equilateral
+  triangles on its edges, on either side, where a front would put its nodes;
+  or, on a wall, two midpoints of its and a neighbour's interior edges: a gap
+  one row high needs a second row);
+  or one of its free nodes removed; the patch is re-triangulated
   constrained-Delaunay (:func:`~bubblemesh.triangulation.constrained_delaunay`,
   exact predicates) inside its own outline, which is kept edge for edge, so
   the mesh stays conforming and boundary nodes never move;
@@ -26,7 +30,12 @@ below 0.7 is this population defect.  So, worst triangle first:
 
 Rounds stop when the worst triangle is at least ``below``, when no variant of
 the WORST worst triangles pays, or after ``rounds``.  Every round is
-deterministic (ties broken by index)."""
+deterministic (ties broken by index).
+
+:func:`balance_count` uses the same re-triangulation and relaxation to bring
+the element count into a window: a node removed where the mesh is most
+crowded for the size field, or inserted where it is sparsest, never lowering
+the mesh's smallest ratio."""
 
 import numpy as np
 from numba import njit
@@ -140,17 +149,46 @@ def _patch(ptr, idx, nodes):
     return np.unique(np.concatenate([idx[ptr[v]:ptr[v + 1]] for v in nodes]))
 
 
-def _variants(X, T, N_of, t, free):
+def _variants(X, T, N_of, t, free, walls):
     """(patch corner nodes, added points, removed node) of each variant for
-    triangle t: an edge's midpoint, the centroids of t and of a neighbour, or
-    one of its free corners removed."""
+    triangle t: an edge's midpoint; for each neighbour u, the centroids of t
+    and u and, if t has a segment edge, two midpoints of the edges of t and u
+    that are not segments (a gap one row high needs two nodes); one of its
+    free corners removed;
+    two of the apexes of the equilateral triangles on its edges (on its own
+    side, and across each edge that is not a segment)."""
     tri = T[t]
     p = X[tri]
+    near = N_of(t)
     out = [(tri, [0.5 * (p[k] + p[(k + 1) % 3])], -1) for k in range(3)]
-    for u in N_of(t):
-        out.append((np.concatenate([tri, T[u]]), [p.mean(axis=0), X[T[u]].mean(axis=0)], -1))
+    on_wall = len(_open_edges(T, (t,), walls)) < 3
+    for u in near:
+        pair = np.concatenate([tri, T[u]])
+        out.append((pair, [p.mean(axis=0), X[T[u]].mean(axis=0)], -1))
+        if on_wall:
+            mids = [0.5 * (X[a] + X[b]) for a, b in _open_edges(T, (t, u), walls)]
+            out += [(pair, [mids[i], mids[j]], -1)
+                    for i in range(len(mids)) for j in range(i + 1, len(mids))]
     out += [(tri, [], int(v)) for v in tri if free[v]]
+    corners = np.concatenate([tri] + [T[u] for u in near])
+    tops = [_apex(p[k], p[(k + 1) % 3]) for k in range(3)]
+    tops += [_apex(p[(k + 1) % 3], p[k]) for k in range(3)
+             if (min(tri[k], tri[(k + 1) % 3]), max(tri[k], tri[(k + 1) % 3])) not in walls]
+    out += [(corners, [tops[i], tops[j]], -1) for i in range(len(tops))
+            for j in range(i + 1, len(tops))]
     return out
+
+
+def _apex(a, b):
+    """The apex of the equilateral triangle on the edge a -> b, left of it."""
+    return 0.5 * (a + b) + np.array([b[1] - a[1], a[0] - b[0]]) * (-0.5 * np.sqrt(3.0))
+
+
+def _open_edges(T, ts, walls):
+    """The distinct edges of triangles ``ts`` that are not segments, sorted."""
+    e = {(min(int(T[t, k]), int(T[t, (k + 1) % 3])), max(int(T[t, k]), int(T[t, (k + 1) % 3])))
+         for t in ts for k in range(3)}
+    return sorted(e - walls)
 
 
 def _allowed(m, grown, counts):
@@ -170,7 +208,7 @@ def _best_variant(X, T, q, ptr, idx, t, free, limit, walls, halvings, steps, cou
 
     m = len(T)
     tries = [(corners, added, removed) for corners, added, removed
-             in _variants(X, T, across, t, free)
+             in _variants(X, T, across, t, free, walls)
              if _allowed(m, m + 2 * len(added) - (2 if removed >= 0 else 0), counts)]
     return _best_of(X, T, q, ptr, idx, tries, free, limit, walls, halvings, steps, None,
                     float(q.sum()) / m - MEAN_DROP)
@@ -253,7 +291,7 @@ def _retriangulate(X, T, patch, added, removed, walls):
     expected = len(patch) + 2 * len(added) - (2 if removed >= 0 else 0)
     if len(made) != expected or _outline(made) != outline:
         return None
-    if len(added) and not np.isin(glob[len(nodes):], made).all():
+    if len(added) and not _member(glob[len(nodes):], np.unique(made)).all():
         return None
     return made
 
@@ -267,23 +305,25 @@ def _relax(X, T, q, ptr, idx, patch, made, added, free, limit, halvings, steps,
     or an area bound breaks."""
     n = len(X)
     ring = np.unique(made)
-    outside = np.setdiff1d(np.unique(np.concatenate([idx[ptr[v]:ptr[v + 1]]
-                                                     for v in ring[ring < n]])), patch)
+    outside = _minus(np.unique(np.concatenate([idx[ptr[v]:ptr[v + 1]]
+                                               for v in ring[ring < n]])), patch)
     near = np.unique(np.concatenate([ring, T[outside].ravel()]))
     relaxed = near[(near >= n) | free[np.minimum(near, n - 1)]]
-    old = np.setdiff1d(np.unique(np.concatenate(
+    old = _minus(np.unique(np.concatenate(
         [idx[ptr[v]:ptr[v + 1]] for v in relaxed[relaxed < n]] + [outside])), patch)
     sub = np.concatenate([T[old], made])
     nodes = np.unique(sub)  # the added ones (>= n) last
     Xl = np.vstack([X[nodes[nodes < n]], added[nodes[nodes >= n] - n]])
     Tl = np.searchsorted(nodes, sub)
-    mov = np.isin(nodes, relaxed)
+    mov = _member(nodes, relaxed)
     before = min(float(q[patch].min()), float(q[old].min(initial=1.0)))
     lptr, lidx = stars(Tl, len(nodes))
     for _ in range(COMPASS_ROUNDS):
         if not compass_polish(Xl, Tl, lptr, lidx, 0, 1.0, mov, 2.0):
             break
     ql = triangle_quality(Xl, Tl)
+    if ((ql.min() <= before + RISE) if floor is None else (ql.min() < floor)):
+        return None
     _mean_sweeps(Xl, Tl, lptr, lidx, mov, float(ql.min()), halvings, steps, POLISH_SWEEPS)
     ql = triangle_quality(Xl, Tl)
     low = float(ql.min())
@@ -294,6 +334,18 @@ def _relax(X, T, q, ptr, idx, patch, made, added, free, limit, halvings, steps,
         return None
     gain = float(ql.sum()) - float(q[old].sum()) - float(q[patch].sum())
     return low, gain, nodes[mov], Xl[mov]
+
+
+def _member(a, b):
+    """Which entries of ``a`` are in the sorted array ``b`` (np.isin for
+    the few sorted nodes of a patch, without its set-up cost)."""
+    at = np.minimum(np.searchsorted(b, a), max(len(b) - 1, 0))
+    return (b[at] == a) if len(b) else np.zeros(len(a), np.bool_)
+
+
+def _minus(a, b):
+    """The entries of the sorted unique ``a`` not in the sorted ``b``."""
+    return a[~_member(a, b)]
 
 
 @njit(cache=True)

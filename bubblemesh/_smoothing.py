@@ -26,6 +26,7 @@ STEPS = (1.0, 0.5, 0.25)
 COMPASS = 8  # directions of the compass search
 COMPASS_HALVINGS = 6
 MARGIN = 1e-9  # far above the rounding of eq. 10 from another corner of the triangle
+SMALL_QUALITY = 4096  # fewer triangles are rated without threads
 
 
 @njit(cache=True, inline="always")
@@ -174,15 +175,31 @@ def gather_for_smoothing(X, triangles, ptr, idx, i, buf, moved_at, seen):
     return deg, sx, sy, unchanged
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)
 def triangle_quality(X, triangles):
     """Eq. 10 per triangle (0 for one that is not counter-clockwise); the
-    triangles in parallel."""
+    triangles in parallel from SMALL_QUALITY on (below, starting the threads
+    costs more than the loop)."""
+    if triangles.shape[0] < SMALL_QUALITY:
+        q = np.empty(triangles.shape[0])
+        for t in range(triangles.shape[0]):
+            q[t] = _rho_of(X, triangles, t)
+        return q
+    return _quality_parallel(X, triangles)
+
+
+@njit(cache=True, parallel=True)
+def _quality_parallel(X, triangles):
     q = np.empty(triangles.shape[0])
     for t in prange(triangles.shape[0]):
-        a, b, c = triangles[t, 0], triangles[t, 1], triangles[t, 2]
-        q[t] = rho(X[a, 0], X[a, 1], X[b, 0], X[b, 1], X[c, 0], X[c, 1])
+        q[t] = _rho_of(X, triangles, t)
     return q
+
+
+@njit(cache=True, inline="always")
+def _rho_of(X, triangles, t):
+    a, b, c = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+    return rho(X[a, 0], X[a, 1], X[b, 0], X[b, 1], X[c, 0], X[c, 1])
 
 
 @njit(cache=True)

@@ -24,7 +24,7 @@ from test_relaxed_flips import _areas, _jittered, _lattice_patch
 
 import bubblemesh as bm
 from bubblemesh import pipeline
-from bubblemesh._patch_repair import _retriangulate, balance_count, repair_worst
+from bubblemesh._patch_repair import _apex, _retriangulate, balance_count, repair_worst
 from bubblemesh.sizing import SizeField, field_count
 
 HALVINGS, STEPS = 4, 3
@@ -317,3 +317,18 @@ def test_bm_meshes_count_is_balanced_to_the_field(monkeypatch):
     O.check_conforming(out.points, out.triangles, out.segments, area=1.0, rel=1e-9)
     assert out.optimization.repair_nodes == len(out.points) - len(m.points) < 0
     assert len(out.radii) == len(out.points)
+
+
+@given(st.tuples(st.floats(-10, 10), st.floats(-10, 10)),
+       st.tuples(st.floats(-10, 10), st.floats(-10, 10)))
+def test_an_apex_makes_an_equilateral_triangle_left_of_its_edge(a, b):
+    """The two-point variants' apexes: the triangle (a, b, apex) has three
+    equal sides and turns counter-clockwise (the exact orientation)."""
+    a, b = np.array(a), np.array(b)
+    length = float(np.hypot(*(b - a)))
+    if length < 1e-3:
+        return
+    top = _apex(a, b)
+    for side in (np.hypot(*(top - a)), np.hypot(*(top - b))):
+        assert math.isclose(side, length, rel_tol=1e-12)
+    assert O.orient2d_sign(*a, *b, *top) > 0
