@@ -135,6 +135,7 @@ BALANCE_OPS = 16  # at most this many
 BALANCE_BELOW = 20_000  # and only in meshes this small (in larger, 16 nodes are < 0.2%)
 BOTH_BELOW, BOTH_COUNT = 5000, 0.03  # both insertions up to this many elements (auto)
 COUNT_TOL = 0.05  # a count this close to the size field's fits it
+MIN_ENOUGH = 0.9  # a mesh whose minimum stays above this is ranked by its mean
 UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
 FRONTAL_ELEMENTS = 1000  # frontal insertion from this many elements of the cap size up
 ITERATIONS = {"centroid": 200, "frontal": 30}  # §3 force iterations by default
@@ -320,8 +321,8 @@ def _better(a, b, asked):
     """Is mesh a better than b: fewer triangles below a radius ratio (eq. 10)
     of 0.7; or as many, and a's count within COUNT_TOL of ``asked`` (the
     field's) where b's is not; or both or neither within it, a higher mean
-    ratio, no lower minimum and a count within BOTH_COUNT of b's (quality is
-    not bought with elements)?"""
+    ratio, a minimum at least b's (or at least MIN_ENOUGH) and a count within
+    BOTH_COUNT of b's (quality is not bought with elements)?"""
     qa, qb = a.quality(), b.quality()
     poor_a, poor_b = int((qa < 0.7).sum()), int((qb < 0.7).sum())
     if poor_a != poor_b:
@@ -330,7 +331,7 @@ def _better(a, b, asked):
     if fits_a != fits_b:
         return fits_a
     return bool(abs(len(qa) / len(qb) - 1.0) <= BOTH_COUNT and qa.mean() > qb.mean()
-                and qa.min() >= qb.min())
+                and qa.min() >= min(qb.min(), MIN_ENOUGH))
 
 
 def _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, clock,

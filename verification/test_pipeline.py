@@ -424,3 +424,38 @@ def test_more_iterations_do_not_spoil_a_hundredfold_grading():
     assert q[1000].min() >= q[200].min() - 0.002, (q[200].min(), q[1000].min())
     assert q[1000].min() >= 0.7
 
+
+
+class _Rated:
+    """A stand-in mesh for the ranking: only its ratios."""
+
+    def __init__(self, *ratios):
+        self.ratios = np.array(ratios, float)
+
+    def quality(self):
+        return self.ratios
+
+
+def test_the_portfolio_ranking_follows_its_rule():
+    """bm.mesh's choice between its small-domain meshes, case by case from
+    the documented rule: fewer elements below 0.7 first, then a count that
+    fits the field, then a higher mean with a minimum that is at least the
+    other's or at least MIN_ENOUGH, at a count within BOTH_COUNT."""
+    better, enough = pipeline._better, pipeline.MIN_ENOUGH
+    n = 100
+    base = _Rated(*([0.95] * (n - 1) + [0.85]))
+    # fewer poor elements wins whatever the mean
+    assert better(_Rated(*([0.9] * n)), _Rated(*([0.99] * (n - 1) + [0.6])), n)
+    # a count that fits the field wins over one that does not
+    assert better(_Rated(*([0.9] * n)), _Rated(*([0.99] * (n + 10))), n)
+    # a higher mean with a minimum at least the other's
+    assert better(_Rated(*([0.96] * (n - 1) + [0.85])), base, n)
+    # a higher mean with a lower minimum, below MIN_ENOUGH: no
+    assert not better(_Rated(*([0.97] * (n - 1) + [0.84])), base, n)
+    # a higher mean with a lower minimum that is still above MIN_ENOUGH: yes
+    high = _Rated(*([0.95] * (n - 1) + [0.95]))
+    assert better(_Rated(*([0.97] * (n - 1) + [enough + 0.01])), high, n)
+    assert not better(_Rated(*([0.97] * (n - 1) + [enough - 0.01])), high, n)
+    # a higher mean bought with more than BOTH_COUNT more elements: no
+    more = int(n * (1 + pipeline.BOTH_COUNT)) + 1  # still within COUNT_TOL of n
+    assert not better(_Rated(*([0.96] * more)), base, n)
