@@ -24,9 +24,9 @@ below 0.7 is this population defect.  So, worst triangle first:
   steps on the star means (:mod:`bubblemesh._smoothing`, :mod:`bubblemesh._odt`);
 - the variant whose changed triangles have the highest smallest ratio (then
   the highest mesh mean) is kept if that smallest ratio is above theirs
-  before, the mesh's mean ratio does not fall, every changed triangle keeps
-  its area bound and the element count stays in the window ``counts`` (or
-  comes closer to it).
+  before, the mesh's mean ratio stays within MEAN_DROP of its value before
+  the first repair, every changed triangle keeps its area bound and the
+  element count stays in the window ``counts`` (or comes closer to it).
 
 Rounds stop when the worst triangle is at least ``below``, when no variant of
 the WORST worst triangles pays, or after ``rounds``.  Every round is
@@ -48,7 +48,7 @@ from .triangulation import constrained_delaunay
 
 WORST = 2  # triangles tried per round, worst first
 RISE = 1e-9  # a smaller rise of the smallest ratio is rounding, not a repair
-MEAN_DROP = 0.0  # a variant may lower the mesh's mean ratio by at most this
+MEAN_DROP = 1e-3  # the repairs may lower the mesh's mean ratio by at most this in all
 COMPASS_ROUNDS = 3
 POLISH_SWEEPS = 3
 CANDIDATES = 8  # nodes (triangles: a quarter) tried per round by balance_count
@@ -63,10 +63,13 @@ def repair_worst(X, T, segments, movable, limit, below, rounds, counts, halvings
     the new arrays, with the removed nodes gone and the inserted ones after
     the old (node numbers below the first removed one unchanged), ``old``
     each node's number in X (-1: inserted) and the number of variants kept."""
+    lowest = float(triangle_quality(np.asarray(X, np.float64), np.asarray(T, np.int64)).mean()
+                   if len(T) else 1.0) - MEAN_DROP
+
     def pick(X, T, q, ptr, idx, free, limit, walls):
         for t in _worst(q, below):
             best = _best_variant(X, T, q, ptr, idx, int(t), free, limit, walls, halvings,
-                                 steps, counts)
+                                 steps, counts, lowest)
             if best is not None:
                 return best
         return None
@@ -199,10 +202,11 @@ def _allowed(m, grown, counts):
         m - min(max(m, low), high))
 
 
-def _best_variant(X, T, q, ptr, idx, t, free, limit, walls, halvings, steps, counts):
+def _best_variant(X, T, q, ptr, idx, t, free, limit, walls, halvings, steps, counts,
+                  lowest):
     """The best kept variant for triangle t as (patch, new triangles, new
-    points, removed node, relaxed nodes and their positions, score), or
-    None."""
+    points, removed node, relaxed nodes and their positions, score) that
+    leaves a mesh mean of at least ``lowest``, or None."""
     def across(s):
         return _edge_neighbours(T, ptr, idx, s, walls)
 
@@ -211,7 +215,7 @@ def _best_variant(X, T, q, ptr, idx, t, free, limit, walls, halvings, steps, cou
              in _variants(X, T, across, t, free, walls)
              if _allowed(m, m + 2 * len(added) - (2 if removed >= 0 else 0), counts)]
     return _best_of(X, T, q, ptr, idx, tries, free, limit, walls, halvings, steps, None,
-                    float(q.sum()) / m - MEAN_DROP)
+                    lowest)
 
 
 def _best_of(X, T, q, ptr, idx, tries, free, limit, walls, halvings, steps, floor, mean):

@@ -1,8 +1,9 @@
 """Local re-triangulation of the worst triangles (bubblemesh._patch_repair),
 the last step of bm.mesh: validity, conformity, fixed boundary nodes, the
-smallest ratio strictly up and the mean not down with every kept variant, the
-area bounds and the count window, same bits on a second run; a node put into
-a perfect lattice taken out again, and a gap one triangle high given nodes.
+smallest ratio strictly up with every kept variant, the mean down by at most
+the MEAN_DROP budget in all, the area bounds and the count window, same bits
+on a second run; a node put into a perfect lattice taken out again, and a gap
+one triangle high given nodes.
 The count balance before it: the count moved two triangles per node toward
 its window and never past it, the minimum never lowered, the most crowded
 node the one removed.
@@ -24,7 +25,13 @@ from test_relaxed_flips import _areas, _jittered, _lattice_patch
 
 import bubblemesh as bm
 from bubblemesh import pipeline
-from bubblemesh._patch_repair import _apex, _retriangulate, balance_count, repair_worst
+from bubblemesh._patch_repair import (
+    MEAN_DROP,
+    _apex,
+    _retriangulate,
+    balance_count,
+    repair_worst,
+)
 from bubblemesh.sizing import SizeField, field_count
 
 HALVINGS, STEPS = 4, 3
@@ -58,11 +65,11 @@ def test_repairs_keep_the_mesh_valid_conforming_and_within_its_bounds(loops, siz
     assert np.all(np.diff(old[kept]) > 0) and np.all(kept[: kept.sum()])
     np.testing.assert_array_equal(old[: m.n_boundary], np.arange(m.n_boundary))
     q = O.radius_ratio_reference(Y, t)
-    if ops:  # every kept variant lifts the worst of what it changed, never the mean down
+    if ops:  # every kept variant lifts the worst of what it changed; the mean keeps its budget
         gone, made = _changed(X0, tri0, Y, t)
         assert q[made].min() > q0[gone].min()
         assert q.min() >= q0.min() * (1 - 1e-12)
-        assert q.mean() >= q0.mean() * (1 - 1e-12)
+        assert q.mean() >= q0.mean() - MEAN_DROP - 1e-12
     else:
         np.testing.assert_array_equal(Y, X0)
         np.testing.assert_array_equal(t, tri0)
@@ -87,10 +94,10 @@ def _changed(X0, tri0, X, tri):
 
 
 @given(st.sampled_from([0.3, 0.2]), st.integers(0, 3), st.integers(0, 2**32 - 1))
-def test_on_bm_meshes_no_repair_lowers_the_mean(size, holes, seed):
+def test_on_bm_meshes_the_repairs_keep_the_mean_within_its_budget(size, holes, seed):
     """bm.mesh's own output (its repair off), repaired at every ratio: the
     mean of a settled mesh is high, so inserted nodes must pay for
-    themselves."""
+    themselves, all but MEAN_DROP of it."""
     rng = np.random.default_rng(seed)
     loops = [np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float)]
     for k in range(holes):  # small square holes in their own quarter
@@ -108,7 +115,7 @@ def test_on_bm_meshes_no_repair_lowers_the_mean(size, holes, seed):
     q0 = O.radius_ratio_reference(X0, tri0)
     Y, t, _, ops = _repair(X0, tri0, m.segments, m.n_boundary, np.full(len(tri0), np.inf))
     q = O.radius_ratio_reference(Y, t)
-    assert q.mean() >= q0.mean() * (1 - 1e-12) and q.min() >= q0.min() * (1 - 1e-12)
+    assert q.mean() >= q0.mean() - MEAN_DROP - 1e-12 and q.min() >= q0.min() * (1 - 1e-12)
     if ops:
         gone, made = _changed(X0, tri0, Y, t)
         assert q[made].min() > q0[gone].min()
@@ -185,7 +192,7 @@ def test_a_gap_one_row_high_gets_nodes(height):
                                 np.full(len(tri), np.inf))
     assert ops >= 1 and len(Y) > len(P)
     q = O.radius_ratio_reference(Y, t)
-    assert q.min() > q0.min() and q.mean() >= q0.mean()
+    assert q.min() > q0.min() and q.mean() >= q0.mean() - MEAN_DROP
     np.testing.assert_array_equal(Y[: len(P)], P)
     O.check_valid(Y, t)
     O.check_conforming(Y, t, domain.segments, area=8 * height, rel=1e-12)
@@ -204,8 +211,9 @@ def test_the_count_window_holds_the_count():
 
 def test_bm_mesh_repairs_a_hole_close_to_a_wall(monkeypatch):
     """A hole a little more than one element from a wall: bm.mesh's last step
-    must leave a better smallest ratio than the mesh without it, no lower a
-    mean, a count within the window of the field's own, and a valid,
+    must leave a better smallest ratio than the mesh without it, a mean
+    lower by at most MEAN_DROP, a count within the window of the field's own,
+    and a valid,
     conforming mesh."""
     outer = np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float)
     hole = np.array([(0.3, 0.11), (0.7, 0.11), (0.7, 0.6), (0.3, 0.6)], float)
@@ -218,7 +226,7 @@ def test_bm_mesh_repairs_a_hole_close_to_a_wall(monkeypatch):
     assert repaired.optimization.repairs >= 1
     q0 = O.radius_ratio_reference(plain.points, plain.triangles)
     q = O.radius_ratio_reference(repaired.points, repaired.triangles)
-    assert q.min() > q0.min() and q.mean() >= q0.mean() * (1 - 1e-12)
+    assert q.min() > q0.min() and q.mean() >= q0.mean() - MEAN_DROP - 1e-12
     O.check_valid(repaired.points, repaired.triangles, repaired.neighbors)
     O.check_conforming(repaired.points, repaired.triangles, repaired.segments,
                        area=domain.area, rel=1e-9)
