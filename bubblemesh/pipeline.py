@@ -753,10 +753,10 @@ def _repaired(mesh, max_area, field):
     most BALANCE_BELOW elements, while the element count is more than
     BALANCE_WINDOW off the count ``field`` asks for
     (:func:`~bubblemesh.sizing.field_count`) and BALANCE_OPS nodes can bring
-    it into that window, a node removed where the
-    mesh is most crowded (inserted where it is sparsest) without lowering its
-    minimum; then the patches around the worst triangles re-triangulated with
-    a node inserted or removed where that raises their smallest ratio, the
+    it into that window, a node removed where the mesh is most crowded
+    (inserted where it is sparsest) without lowering its minimum; then the
+    patches around the worst triangles re-triangulated with one or two points
+    inserted or a node removed where that raises their smallest ratio, the
     count within REPAIR_WINDOW of the field's or brought closer to it; both
     within the area bounds.  An inserted node's radius is half its mean edge
     (as the area bound's)."""
