@@ -164,11 +164,11 @@ def _variants(X, T, N_of, t, free, walls):
     p = X[tri]
     near = N_of(t)
     out = [(tri, [0.5 * (p[k] + p[(k + 1) % 3])], -1) for k in range(3)]
-    on_wall = len(_open_edges(T, (t,), walls)) < 3
+    inner = _open_edges(T, (t,), walls)
     for u in near:
         pair = np.concatenate([tri, T[u]])
         out.append((pair, [p.mean(axis=0), X[T[u]].mean(axis=0)], -1))
-        if on_wall:
+        if len(inner) < 3:  # t on a wall
             mids = [0.5 * (X[a] + X[b]) for a, b in _open_edges(T, (t, u), walls)]
             out += [(pair, [mids[i], mids[j]], -1)
                     for i in range(len(mids)) for j in range(i + 1, len(mids))]
@@ -176,7 +176,7 @@ def _variants(X, T, N_of, t, free, walls):
     corners = np.concatenate([tri] + [T[u] for u in near])
     tops = [_apex(p[k], p[(k + 1) % 3]) for k in range(3)]
     tops += [_apex(p[(k + 1) % 3], p[k]) for k in range(3)
-             if (min(tri[k], tri[(k + 1) % 3]), max(tri[k], tri[(k + 1) % 3])) not in walls]
+             if (min(tri[k], tri[(k + 1) % 3]), max(tri[k], tri[(k + 1) % 3])) in inner]
     out += [(corners, [tops[i], tops[j]], -1) for i in range(len(tops))
             for j in range(i + 1, len(tops))]
     return out
@@ -184,14 +184,14 @@ def _variants(X, T, N_of, t, free, walls):
 
 def _apex(a, b):
     """The apex of the equilateral triangle on the edge a -> b, left of it."""
-    return 0.5 * (a + b) + np.array([b[1] - a[1], a[0] - b[0]]) * (-0.5 * np.sqrt(3.0))
+    return 0.5 * (a + b) + 0.5 * np.sqrt(3.0) * np.array([a[1] - b[1], b[0] - a[0]])
 
 
 def _open_edges(T, ts, walls):
     """The distinct edges of triangles ``ts`` that are not segments, sorted."""
-    e = {(min(int(T[t, k]), int(T[t, (k + 1) % 3])), max(int(T[t, k]), int(T[t, (k + 1) % 3])))
-         for t in ts for k in range(3)}
-    return sorted(e - walls)
+    sub = T[list(ts)]
+    return sorted(_edge_keys(np.concatenate([sub[:, [0, 1]], sub[:, [1, 2]], sub[:, [2, 0]]]))
+                  - walls)
 
 
 def _allowed(m, grown, counts):
@@ -325,13 +325,16 @@ def _relax(X, T, q, ptr, idx, patch, made, added, free, limit, halvings, steps,
     for _ in range(COMPASS_ROUNDS):
         if not compass_polish(Xl, Tl, lptr, lidx, 0, 1.0, mov, 2.0):
             break
-    ql = triangle_quality(Xl, Tl)
-    if ((ql.min() <= before + RISE) if floor is None else (ql.min() < floor)):
+    def short(low):  # the rule a kept variant's smallest ratio must pass
+        return low <= before + RISE if floor is None else low < floor
+
+    reached = float(triangle_quality(Xl, Tl).min())
+    if short(reached):  # the mean sweeps keep it as their floor: they will not lift it
         return None
-    _mean_sweeps(Xl, Tl, lptr, lidx, mov, float(ql.min()), halvings, steps, POLISH_SWEEPS)
+    _mean_sweeps(Xl, Tl, lptr, lidx, mov, reached, halvings, steps, POLISH_SWEEPS)
     ql = triangle_quality(Xl, Tl)
     low = float(ql.min())
-    if (low <= before + RISE) if floor is None else (low < floor):
+    if short(low):
         return None
     bound = np.concatenate([limit[old], np.full(len(made), limit[patch].min())])
     if (_areas(Xl, Tl) > bound).any():
