@@ -164,6 +164,96 @@ def test_cases_build_a_bubblemesh_domain():
         np.testing.assert_array_equal(dom.points, np.vstack(loops))
 
 
+def test_naca_airfoil_against_its_polynomial():
+    """Every node on y = ±5t(0.2969 sqrt x - ...), the trailing edge open by
+    the polynomial's value at x = 1, clockwise, and the area within the
+    trapezoid error of the closed-form integral 2 * 5t * (0.2969 * 2/3 -
+    0.1260/2 - 0.3516/3 + 0.2843/4 - 0.1015/5)."""
+    t = 0.12
+    foil = geometry.naca_airfoil(t, 400, chord=2.0, origin=(1.0, -0.5))
+    x, y = (foil[:, 0] - 1.0) / 2.0, (foil[:, 1] + 0.5) / 2.0
+    half = 5 * t * (0.2969 * np.sqrt(np.clip(x, 0, 1)) - 0.1260 * x - 0.3516 * x**2
+                    + 0.2843 * x**3 - 0.1015 * x**4)
+    np.testing.assert_allclose(np.abs(y), half, atol=1e-12)
+    assert len(foil) == 801 and _spacing(foil).min() > 0
+    gap = 2 * 5 * t * (0.2969 - 0.1260 - 0.3516 + 0.2843 - 0.1015)
+    edge = foil[x > 1 - 1e-12]
+    assert len(edge) == 2 and np.hypot(*(edge[0] - edge[1])) == pytest.approx(gap * 2.0, rel=1e-12)
+    exact = 4.0 * 2 * 5 * t * (0.2969 * 2 / 3 - 0.1260 / 2 - 0.3516 / 3 + 0.2843 / 4 - 0.1015 / 5)
+    assert -geometry.signed_area(foil) == pytest.approx(exact, rel=2e-4)
+
+
+def test_gear_and_slot_against_closed_forms():
+    """The gear: 5 corners a tooth kept exactly (root and tip radii at the
+    stated angles), every node between the tip circle and the root's longest
+    chord, spacing at most the
+    asked one; its area that of the corner polygon (GEOS).  The slot: nodes
+    on its two half circles and two sides, area 2 r L + n r^2 sin(pi / n)
+    (two inscribed half polygons of n sides)."""
+    shapely = pytest.importorskip("shapely")
+    teeth, root, tip = 10, 1.0, 1.25
+    g = geometry.gear(teeth, root, tip, 0.03)
+    r = np.hypot(*g.T)
+    assert r.min() >= root * math.cos(math.pi * 0.3 / teeth) - 1e-12 and r.max() <= tip + 1e-12
+    assert _spacing(g).max() <= 0.03 * 1.5
+    turns = [(k + f) / teeth for k in range(teeth) for f in (0, .15, .3, .55, .7)]
+    radii = [root, root, tip, tip, root] * teeth
+    corners = [(rr * math.cos(2 * math.pi * a), rr * math.sin(2 * math.pi * a))
+               for a, rr in zip(turns, radii)]
+    for c in corners:
+        assert np.hypot(*(g - c).T).min() < 1e-12
+    assert shapely.Polygon(g).is_valid
+    assert geometry.signed_area(g) == pytest.approx(shapely.Polygon(corners).area, rel=1e-12)
+
+    length, radius = 1.5, 0.3
+    s = geometry.slot((2.0, -1.0), length, radius, 0.05)
+    n = round(math.pi * radius / 0.05)
+    dx = np.maximum(np.abs(s[:, 0] - 2.0) - length / 2, 0.0)
+    on_arc = np.isclose(np.hypot(dx, s[:, 1] + 1.0), radius, atol=1e-12)
+    on_side = (np.abs(s[:, 0] - 2.0) <= length / 2) & np.isclose(np.abs(s[:, 1] + 1.0), radius)
+    assert (on_arc | on_side).all() and shapely.Polygon(s).is_valid
+    assert -geometry.signed_area(s) == pytest.approx(
+        2 * radius * length + n * radius**2 * math.sin(math.pi / n), rel=1e-12)
+
+
+def test_graded_polygon_keeps_corners_and_grades():
+    """Corners kept, the area the polygon's, each step no longer than the
+    spacing asked at its start (stretched at most 1.5 times on the last step
+    of a side) and the finest step next to the focus."""
+    corners = [(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)]
+    L = geometry.graded_polygon(corners, (1, 1), 0.01, 0.1, 0.3)
+    for c in corners:
+        assert (np.abs(L - c).max(axis=1) == 0).any(), c
+    assert geometry.signed_area(L) == pytest.approx(3.0, rel=1e-12)
+    step = _spacing(L)
+    asked = np.minimum(0.1, 0.01 + 0.3 * np.hypot(L[:, 0] - 1, L[:, 1] - 1))
+    assert (step <= 1.5 * asked + 1e-12).all()
+    assert step.min() == pytest.approx(0.01, rel=1e-9)
+    assert np.hypot(*(L[np.argmin(step)] - (1, 1))) < 0.011
+
+
+def test_quality_benchmark_domains_are_valid_regions():
+    """Every domain of the quality benchmark is a valid polygon with holes
+    (GEOS) of the area bubblemesh computes; the random holes lie apart and
+    inside their square."""
+    shapely = pytest.importorskip("shapely")
+    bm = pytest.importorskip("bubblemesh")
+    from bubblemesh.studies import quality as Q
+
+    names = []
+    for name, loops, _ in Q.cases(None):
+        names.append(name)
+        region = shapely.Polygon(loops[0], loops[1:])
+        assert region.is_valid, name
+        assert bm.Domain.from_loops(loops).area == pytest.approx(region.area, rel=1e-9), name
+    for name in ("airfoil in channel", "gear", "slotted plate", "graded L-shape",
+                 "square+10 random holes"):
+        assert name in names
+    holes = [shapely.Polygon(h) for h in Q._random_holes(10, seed=3)]
+    assert all(shapely.box(0.15, 0.15, 9.85, 9.85).contains(h) for h in holes)
+    assert all(a.distance(b) > 0.3 for i, a in enumerate(holes) for b in holes[:i])
+
+
 # ------------------------------------------------------------------ independent recomputation
 
 

@@ -18,6 +18,10 @@ __all__ = [
     "polygon",
     "resample_curve",
     "ellipse_curve",
+    "naca_airfoil",
+    "gear",
+    "slot",
+    "graded_polygon",
     "signed_area",
     "clockwise",
     "counterclockwise",
@@ -95,3 +99,70 @@ def ellipse_curve(
         return np.column_stack([center[0] + c * x - s * y, center[1] + s * x + c * y])
 
     return f
+
+
+def naca_airfoil(thickness: float, panels: int, chord: float = 1.0,
+                 origin: Sequence[float] = (0.0, 0.0)) -> np.ndarray:
+    """A symmetric NACA 00xx section (``thickness`` as a fraction of the
+    chord), clockwise as a hole, with its blunt trailing edge: the standard
+    four-digit polynomial, whose last coefficient 0.1015 leaves the edge open
+    by about 2% of the thickness; ``panels`` nodes a side, clustered at both
+    edges by cosine spacing."""
+    x = 0.5 * (1.0 - np.cos(np.linspace(0.0, np.pi, panels + 1)))
+    y = 5.0 * thickness * (0.2969 * np.sqrt(x) - 0.1260 * x - 0.3516 * x**2
+                           + 0.2843 * x**3 - 0.1015 * x**4)
+    upper = np.column_stack([x, y])[::-1]  # trailing edge to leading edge
+    lower = np.column_stack([x, -y])[1:]  # and back: counter-clockwise
+    loop = chord * np.vstack([upper, lower]) + np.asarray(origin, dtype=np.float64)
+    return clockwise(loop)
+
+
+def gear(teeth: int, root: float, tip: float, spacing: float) -> np.ndarray:
+    """A spur-gear outline, counter-clockwise about the origin: per tooth
+    period, corners on the root circle at 0 and 0.15 of it, straight flanks
+    up to corners on the tip circle at 0.3 and 0.55 and down to the root at
+    0.7, all joined by straight sides; corners kept, sides split by
+    :func:`polygon` at ``spacing``."""
+    corners = []
+    for k in range(teeth):
+        for f, r in ((0.0, root), (0.15, root), (0.3, tip), (0.55, tip), (0.7, root)):
+            a = 2.0 * np.pi * (k + f) / teeth
+            corners.append((r * np.cos(a), r * np.sin(a)))
+    return polygon(corners, spacing)
+
+
+def slot(center: Sequence[float], length: float, radius: float, spacing: float) -> np.ndarray:
+    """A straight slot (two half circles of ``radius`` joined by sides
+    ``length`` long, along x), clockwise as a hole."""
+    cx, cy = float(center[0]), float(center[1])
+    n = max(2, int(round(np.pi * radius / spacing)))
+    t = np.linspace(-0.5 * np.pi, 0.5 * np.pi, n + 1)[:-1]
+    right = np.column_stack([cx + 0.5 * length + radius * np.cos(t), cy + radius * np.sin(t)])
+    left = np.column_stack([cx - 0.5 * length - radius * np.cos(t), cy - radius * np.sin(t)])
+    m = max(1, int(round(length / spacing)))
+    s = np.arange(m)[:, None] / m
+    top = np.array([cx + 0.5 * length, cy + radius]) + s * np.array([-length, 0.0])
+    bottom = np.array([cx - 0.5 * length, cy - radius]) + s * np.array([length, 0.0])
+    return clockwise(np.vstack([right, top, left, bottom]))
+
+
+def graded_polygon(corners: Sequence[Sequence[float]], focus: Sequence[float], fine: float,
+                   coarse: float, growth: float) -> np.ndarray:
+    """Nodes along a closed polygon, every corner kept, spaced ``fine`` at
+    the point ``focus`` and growing by ``growth`` per unit of distance from
+    it, up to ``coarse``: each side walked in steps of the spacing at the
+    current node, the last step stretched to end on the corner."""
+    c = np.asarray(corners, dtype=np.float64)
+    f = np.asarray(focus, dtype=np.float64)
+    out = []
+    for i in range(len(c)):
+        a, b = c[i], c[(i + 1) % len(c)]
+        length = float(np.hypot(*(b - a)))
+        s = [0.0]
+        while True:
+            h = min(coarse, fine + growth * float(np.hypot(*(a + s[-1] / length * (b - a) - f))))
+            if s[-1] + 1.5 * h >= length:
+                break
+            s.append(s[-1] + h)
+        out.append(a + np.asarray(s)[:, None] / length * (b - a))
+    return np.vstack(out)

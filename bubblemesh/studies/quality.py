@@ -32,6 +32,7 @@ import numpy as np
 
 import bubblemesh as bm
 from bubblemesh.quality import radius_ratio
+from bubblemesh.studies import geometry
 
 
 def _square(side, spacing, lo=0.0):
@@ -105,6 +106,31 @@ def cases(data: Path | None):
         _circle((2 + 2 * i, 2 + 2 * j), 0.4, 0.05) for i in range(4) for j in range(4)], {}
     yield "channel+cylinder", [np.array([(0, 0), (20, 0), (20, 1), (0, 1)], float),
                                _circle((2.0, 0.5), 0.15, 0.02)], {}
+    yield "airfoil in channel", [geometry.rectangle(-2.0, -1.5, 4.0, 1.5, 0.15),
+                                 geometry.naca_airfoil(0.12, 120)], {}
+    yield "gear", [geometry.gear(12, 1.0, 1.2, 0.02),
+                   geometry.clockwise(_circle((0, 0), 0.35, 0.02))], {}
+    yield "slotted plate", [geometry.rectangle(0.0, 0.0, 6.0, 3.0, 0.1),
+                            geometry.slot((1.5, 1.0), 1.0, 0.2, 0.04),
+                            geometry.slot((4.5, 1.0), 1.0, 0.2, 0.04),
+                            geometry.slot((3.0, 2.2), 2.0, 0.15, 0.03),
+                            geometry.clockwise(geometry.rectangle(2.6, 0.5, 3.4, 0.9, 0.05))], {}
+    yield "graded L-shape", [geometry.graded_polygon(
+        [(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)], (1, 1), 0.01, 0.1, 0.3)], {}
+    yield "square+10 random holes", [_square(10.0, 0.5)] + _random_holes(10, seed=3), {}
+
+
+def _random_holes(count, seed):
+    """``count`` disjoint circular holes (radius 0.2-0.8, spacing 0.03-0.2,
+    at least 0.4 apart) in the square (1, 9)^2, clockwise."""
+    rng = np.random.default_rng(seed)
+    holes, placed = [], []
+    while len(holes) < count:
+        c, r = rng.uniform(1.0, 9.0, 2), rng.uniform(0.2, 0.8)
+        if all(np.hypot(*(c - c2)) > r + r2 + 0.4 for c2, r2 in placed):
+            placed.append((c, r))
+            holes.append(geometry.clockwise(_circle(c, r, rng.uniform(0.03, 0.2))))
+    return holes
 
 
 def _stats(points, triangles):
