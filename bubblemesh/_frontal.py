@@ -24,6 +24,11 @@ frontal Delaunay refinement:
   holds it, reached by a walk that never crosses the boundary; where it
   cannot be placed so (outside the domain, on a node, not in the active
   triangle's circumcircle), the centroid is inserted as in the paper;
+- a triangle with two edges on the walls whose angle between them is wider
+  than CORNER_OPEN is active however small it is (one triangle cannot fill
+  such a corner well: where the walls are split finer than the field, it
+  would be accepted), and its node goes on the corner's bisector, as far
+  from the corner as the two walls are long on average;
 - a node that would come closer than CROWD h to one of its neighbours is
   not inserted: its triangle counts as accepted, the front moves on.  So
   nodes keep at least CROWD times the smallest h apart, which bounds the
@@ -66,6 +71,8 @@ WALL_FIRST = 4.0  # heap keys of wall triangles drop by this: below every other 
 WALK_STEPS = 64  # a frontal node lies next to its triangle: a longer walk gives up
 CROWD = 0.35  # no new node closer than this times h to a neighbour
 SQRT3 = math.sqrt(3.0)
+CORNER_OPEN = 100.0  # degrees: a corner triangle wider than this gets a node on its bisector
+OPEN_KEY = 0.5  # the key of such a triangle: active, whatever its size
 KEY_BLOCK = 4096  # initial triangles keyed per parallel block
 
 
@@ -105,7 +112,50 @@ def frontal_key(P, tri, nbr, t, r_e, factor, field, stack, limits):
         for k, length in ((0, la), (1, lb), (2, lc)):
             if nbr[t, k] < 0:
                 h = max(h, length)
-    return (h / SQRT3) / (la * lb * lc / (4.0 * area)) * threshold
+    key = (h / SQRT3) / (la * lb * lc / (4.0 * area)) * threshold
+    if key >= 1.0 and open_corner(P, tri, nbr, t, limits[2]) >= 0:
+        return OPEN_KEY
+    return key
+
+
+@njit(cache=True)
+def open_corner(P, tri, nbr, t, cos_open):
+    """Slot of t's corner node v when two of t's edges are on the walls and
+    its angle at v is wider than the one whose cosine is ``cos_open``, else
+    -1.  One triangle cannot fill such a corner well (an isosceles one of
+    apex angle 100 degrees has a radius ratio of 0.72, of 120 degrees 0.46):
+    it needs a node inside, on the bisector."""
+    k = -1
+    walls = 0
+    for j in range(3):
+        if nbr[t, j] < 0:
+            walls += 1
+        else:
+            k = j
+    if walls != 2:
+        return -1
+    v = unsigned(tri[t, k])
+    a = unsigned(tri[t, (k + 1) % 3])
+    b = unsigned(tri[t, (k + 2) % 3])
+    ux, uy = P[a, 0] - P[v, 0], P[a, 1] - P[v, 1]
+    wx, wy = P[b, 0] - P[v, 0], P[b, 1] - P[v, 1]
+    norms = math.sqrt((ux * ux + uy * uy) * (wx * wx + wy * wy))
+    return k if ux * wx + uy * wy < cos_open * norms else -1
+
+
+@njit(cache=True)
+def corner_point(P, tri, t, k):
+    """The node for t's open corner v (slot k): on the bisector of its angle,
+    as far from v as its two walls' mean length.  Returns (x, y)."""
+    v = unsigned(tri[t, k])
+    a = unsigned(tri[t, (k + 1) % 3])
+    b = unsigned(tri[t, (k + 2) % 3])
+    la = math.hypot(P[a, 0] - P[v, 0], P[a, 1] - P[v, 1])
+    lb = math.hypot(P[b, 0] - P[v, 0], P[b, 1] - P[v, 1])
+    bx = (P[a, 0] - P[v, 0]) / la + (P[b, 0] - P[v, 0]) / lb
+    by = (P[a, 1] - P[v, 1]) / la + (P[b, 1] - P[v, 1]) / lb
+    reach = 0.5 * (la + lb) / math.hypot(bx, by)
+    return P[v, 0] + bx * reach, P[v, 1] + by * reach
 
 
 @njit(cache=True, inline="always")
@@ -260,6 +310,14 @@ def _place(P, tri, nbr, t, density, field, stack):
     """Where t is split and from which triangle the cavity grows: the frontal
     node (module docstring) or, failing that, t's centroid.  Returns
     (x, y, start triangle); start -1 when t cannot be split at all."""
+    if density[t] == OPEN_KEY:
+        c = open_corner(P, tri, nbr, t, -2.0)  # any angle: the key says it is open
+        if c >= 0:
+            x, y = corner_point(P, tri, t, c)
+            if in_conflict(P, tri, t, x, y):
+                s = walk_to(P, tri, nbr, t, x, y, WALK_STEPS)
+                if s >= 0:
+                    return x, y, s
     k = front_edge(tri, nbr, density, t)
     a = unsigned(tri[t, (k + 1) % 3])
     b = unsigned(tri[t, (k + 2) % 3])

@@ -34,8 +34,10 @@ deterministic (ties broken by index).
 
 :func:`balance_count` uses the same re-triangulation and relaxation to bring
 the element count into a window: a node removed where the mesh is most
-crowded for the size field, or inserted where it is sparsest, never lowering
-the mesh's smallest ratio."""
+crowded for the size field (if none of those can go, as when they are all
+in the walls' first row, the most crowded off it, the mesh's mean kept
+within INNER_DROP of its value before the balance), or inserted where it is
+sparsest, never lowering the mesh's smallest ratio."""
 
 import numpy as np
 from numba import njit
@@ -51,6 +53,7 @@ RISE = 1e-9  # a smaller rise of the smallest ratio is rounding, not a repair
 MEAN_DROP = 1e-3  # the repairs may lower the mesh's mean ratio by at most this in all
 COMPASS_ROUNDS = 3
 POLISH_SWEEPS = 3
+INNER_DROP = 2e-3  # removals off the walls' first row may lower the mean by this in all
 CANDIDATES = 8  # nodes (triangles: a quarter) tried per round by balance_count
 
 
@@ -80,13 +83,18 @@ def repair_worst(X, T, segments, movable, limit, below, rounds, counts, halvings
 def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings, steps):
     """While the element count is above ``counts`` (low, high), remove the
     free node whose star is most crowded for the size field (smallest summed
-    area over the areas ``size`` asks for) that can go; while it is below,
+    area over the areas ``size`` asks for) that can go, or failing that the
+    most crowded whose triangles touch no wall node while the mean stays
+    within INNER_DROP of its start; while it is below,
     insert a point in the sparsest triangle (an edge midpoint or its
     centroid).  Of the CANDIDATES tried per round the variant with the
     highest smallest ratio of its changed triangles (then mesh mean) is kept
     if that ratio is not below the mesh's minimum and the area bounds hold.
     ``size`` maps (k, 2) points to (k,) sizes; the rest and the result as
     :func:`repair_worst`."""
+    lowest = float(triangle_quality(np.asarray(X, np.float64), np.asarray(T, np.int64)).mean()
+                   if len(T) else 1.0) - INNER_DROP
+
     def pick(X, T, q, ptr, idx, free, limit, walls):
         m = len(T)
         if counts[0] <= m <= counts[1]:
@@ -96,9 +104,17 @@ def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings
         if m > counts[1]:
             crowd = np.bincount(T.ravel(), np.repeat(fill, 3), len(X))
             crowd[~free] = np.inf
-            order = np.lexsort((np.arange(len(X)), crowd))[:CANDIDATES]
-            tries = [(np.unique(T[idx[ptr[v]:ptr[v + 1]]]), [], int(v))
-                     for v in order if np.isfinite(crowd[v])]
+            best = _best_of(X, T, q, ptr, idx, _removals(T, ptr, idx, crowd), free, limit,
+                            walls, halvings, steps, floor, None)
+            if best is not None:
+                return best
+            # the most crowded are often a wall's first row, where no node can go:
+            # then the most crowded of the nodes off it
+            walled = np.zeros(len(X), np.bool_)
+            walled[T[(~free[T]).any(axis=1)].ravel()] = True
+            crowd[walled] = np.inf
+            return _best_of(X, T, q, ptr, idx, _removals(T, ptr, idx, crowd), free, limit,
+                            walls, halvings, steps, floor, lowest)
         else:
             order = np.lexsort((np.arange(m), -fill))[:CANDIDATES // 4]
             tries = [(T[t], [point], -1) for t in order for point in
@@ -108,6 +124,14 @@ def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings
                         floor, None)
 
     return _rounds(X, T, segments, movable, limit, rounds, pick)
+
+
+def _removals(T, ptr, idx, crowd):
+    """Variants removing each of the CANDIDATES nodes of least ``crowd``
+    (finite), ties by index."""
+    order = np.lexsort((np.arange(len(crowd)), crowd))[:CANDIDATES]
+    return [(np.unique(T[idx[ptr[v]:ptr[v + 1]]]), [], int(v))
+            for v in order if np.isfinite(crowd[v])]
 
 
 def _rounds(X, T, segments, movable, limit, rounds, pick):

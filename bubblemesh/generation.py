@@ -250,7 +250,8 @@ def _limits():
     """The frontal kernel's acceptance thresholds, inside and on the walls."""
     from . import _frontal
 
-    return np.array([_frontal.ACCEPT, _frontal.WALL_ACCEPT])
+    return np.array([_frontal.ACCEPT, _frontal.WALL_ACCEPT,
+                     math.cos(math.radians(_frontal.CORNER_OPEN))])
 
 
 def _run(ws, state, acc, limit, bar, step):

@@ -131,8 +131,9 @@ REPAIR_BELOW = 0.9  # patches around triangles below this ratio are re-triangula
 REPAIR_OPS = 16  # at most this many of them
 REPAIR_WINDOW = 0.035  # they keep the element count this close to the field's (or bring it closer)
 BALANCE_WINDOW = 0.03  # a count further off the field's gets nodes removed or inserted
-BALANCE_OPS = 16  # at most this many
-BALANCE_BELOW = 20_000  # and only in meshes this small (in larger, 16 nodes are < 0.2%)
+BALANCE_OPS = 32  # at most this many
+BALANCE_SHARE = 0.05  # nor when the count is further off than this share of the field's
+BALANCE_BELOW = 20_000  # and only in meshes this small (in larger, 32 nodes are < 0.4%)
 BOTH_BELOW, BOTH_COUNT = 5000, 0.03  # both insertions up to this many elements (auto)
 COUNT_TOL = 0.05  # a count this close to the size field's fits it
 MIN_ENOUGH = 0.9  # a mesh whose minimum stays above this is ranked by its mean
@@ -753,8 +754,9 @@ def _repaired(mesh, max_area, field):
     most BALANCE_BELOW elements, while the element count is more than
     BALANCE_WINDOW off the count ``field`` asks for
     (:func:`~bubblemesh.sizing.field_count`) and BALANCE_OPS nodes can bring
-    it into that window, a node removed where the mesh is most crowded
-    (inserted where it is sparsest) without lowering its minimum; then the
+    it into that window (it is at most BALANCE_SHARE of that count outside),
+    a node removed where the mesh is most crowded (inserted where it is
+    sparsest) without lowering its minimum; then the
     patches around the worst triangles re-triangulated with one or two points
     inserted or a node removed where that raises their smallest ratio, the
     count within REPAIR_WINDOW of the field's or brought closer to it; both
@@ -767,7 +769,8 @@ def _repaired(mesh, max_area, field):
     asked = field_count(field, X, T)
     miss = abs(len(T) - min(max(len(T), asked * (1.0 - BALANCE_WINDOW)),
                             asked * (1.0 + BALANCE_WINDOW)))
-    off = 0 < miss <= 2 * BALANCE_OPS  # beyond, BALANCE_OPS nodes cannot mend it
+    # beyond, BALANCE_OPS nodes cannot mend it, or mending it would remake the mesh
+    off = 0 < miss <= min(2 * BALANCE_OPS, BALANCE_SHARE * asked)
     if not off and not poor:
         return mesh
     segments = np.asarray(mesh.segments)

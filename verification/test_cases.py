@@ -246,8 +246,8 @@ def test_quality_benchmark_domains_are_valid_regions():
         region = shapely.Polygon(loops[0], loops[1:])
         assert region.is_valid, name
         assert bm.Domain.from_loops(loops).area == pytest.approx(region.area, rel=1e-9), name
-    for name in ("airfoil in channel", "gear", "slotted plate", "graded L-shape",
-                 "square+10 random holes"):
+    for name in ("airfoil in channel", "gear", "gear, corners only", "slotted plate",
+                 "graded L-shape", "square+10 random holes"):
         assert name in names
     holes = [shapely.Polygon(h) for h in Q._random_holes(10, seed=3)]
     assert all(shapely.box(0.15, 0.15, 9.85, 9.85).contains(h) for h in holes)

@@ -9,7 +9,8 @@ domains with a size cap, against independent checks:
   for a few where a node would have crowded another), and inserted nodes
   keep CROWD h from their neighbours, from any start;
 - the frontal node of a front edge is the apex of the isosceles triangle of
-  circumradius max(h / sqrt(3), |ab| / 2), closed forms;
+  circumradius max(h / sqrt(3), |ab| / 2), closed forms; an input corner
+  wider than CORNER_OPEN is never left as one triangle;
 - the walk returns a triangle that holds the point (exact orientation in
   rationals) or refuses a point off the domain's interior;
 - the rows make a lattice: most interior nodes have six triangles, and the
@@ -87,6 +88,38 @@ def test_frontal_triangles_meet_their_bubbles(loops, size):
     limit = np.where(wall, WALL_ACCEPT * np.maximum(h, reach), ACCEPT * h) / math.sqrt(3)
     missed = int(np.sum(R > limit * (1 + 1e-9)))
     assert missed <= max(2, len(T) // 100), f"{missed} of {len(T)} triangles not met"
+
+
+@pytest.mark.parametrize("sides, divide", [(12, 200), (12, 500), (5, 20), (5, 40)])
+def test_an_open_corner_gets_a_node_on_its_bisector(sides, divide):
+    """Corners wider than CORNER_OPEN whose walls are split finer than the
+    field (a gear's tooth tips, a regular pentagon's corners) are not left as
+    one triangle: every such input corner has
+    at least two triangles in the frontal §2 mesh.  Angles from the input
+    loop in numpy."""
+    from bubblemesh._frontal import CORNER_OPEN
+    from bubblemesh.studies.geometry import gear
+
+    if sides == 12:
+        loop = gear(12, 1.0, 1.2, 10.0)  # its corners only
+    else:
+        t = 2 * np.pi * np.arange(sides) / sides
+        loop = np.column_stack([np.cos(t), np.sin(t)])
+    domain = bm.Domain.from_loops([loop])
+    field = SizeField.from_domain(domain, size=math.sqrt(4 * domain.area / divide / math.sqrt(3)))
+    fine = refine_boundary(domain, field).to_domain()
+    m = generate_sized(fine, field, frontal=True)
+    before, after = np.roll(loop, 1, axis=0) - loop, np.roll(loop, -1, axis=0) - loop
+    cross = after[:, 0] * before[:, 1] - after[:, 1] * before[:, 0]
+    angle = np.degrees(np.arctan2(cross, np.einsum("ij,ij->i", after, before)))
+    wide = np.flatnonzero((angle % 360 > CORNER_OPEN) & (angle % 360 < 180))
+    assert len(wide) >= 5  # the test's premise: open corners there are
+    T = np.asarray(m.triangles)
+    counts = np.bincount(T.ravel(), minlength=len(m.points))
+    corners = [int(np.flatnonzero((np.asarray(m.points) == loop[i]).all(axis=1))[0]) for i in wide]
+    assert (counts[corners] >= 2).all(), counts[corners]
+    O.check_valid(m.points, T, m.neighbors)
+    O.check_constrained_delaunay(m.points, T, m.segments)
 
 
 def _edges(T):

@@ -84,9 +84,9 @@ def triangle_data() -> Path | None:
 
 def cases(data: Path | None):
     """(name, loops, bm.mesh keyword arguments): corner-only inputs get
-    max_area = area / 200, the others their own spacing.  ``data``: the folder
-    of Triangle's A.poly and double_hex3.poly, by default the ``triangle``
-    package's (:func:`triangle_data`)."""
+    max_area = area / 200 (the gear area / 1000), the others their own
+    spacing.  ``data``: the folder of Triangle's A.poly and double_hex3.poly,
+    by default the ``triangle`` package's (:func:`triangle_data`)."""
     data = data if data is not None else triangle_data()
     for name, loops in _paper_loops().items():
         yield name, loops, {}
@@ -110,6 +110,8 @@ def cases(data: Path | None):
                                  geometry.naca_airfoil(0.12, 120)], {}
     yield "gear", [geometry.gear(12, 1.0, 1.2, 0.02),
                    geometry.clockwise(_circle((0, 0), 0.35, 0.02))], {}
+    teeth = geometry.gear(12, 1.0, 1.2, 10.0)  # corners only: the walls split finer than h
+    yield "gear, corners only", [teeth], {"max_area": geometry.signed_area(teeth) / 1000}
     yield "slotted plate", [geometry.rectangle(0.0, 0.0, 6.0, 3.0, 0.1),
                             geometry.slot((1.5, 1.0), 1.0, 0.2, 0.04),
                             geometry.slot((4.5, 1.0), 1.0, 0.2, 0.04),
