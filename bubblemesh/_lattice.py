@@ -7,7 +7,10 @@ is known in advance: the nodes of the triangular lattice of spacing h.
 :func:`lattice_points` lays it over the domain and keeps the nodes that are
 at least ``margin`` h from every boundary node and where the field is its
 cap; the frontal insertion of §2 then fills only the band between the walls
-and the lattice, whose triangles it accepts as they are.
+and the lattice, whose triangles it accepts as they are.  The lattice may
+be laid in a frame, through a boundary node along a wall and as fine as that
+wall's pieces: walls that lie on one lattice (a regular hexagon) then meet it
+without a seam.
 
 Inside or outside is decided per lattice row by the parity of the boundary
 segments the row's line crosses (half-open in y, so a line through a node
@@ -28,31 +31,42 @@ JITTER = 1e-9
 
 
 def lattice_points(points: np.ndarray, segments: np.ndarray, h: float, margin: float,
-                   size) -> np.ndarray:
+                   size, frame=None) -> np.ndarray:
     """The triangular lattice of spacing ``h`` (rows along x, anchored at the
     lower left of the boundary's bounding box) inside the domain bounded by
     ``segments`` over ``points``, at least ``margin`` h from every boundary
-    node, where ``size`` (a callable h(xy)) is h: (K, 2), row by row."""
+    node, where ``size`` (a callable h(xy)) is h: (K, 2), row by row.
+    ``frame`` (origin, unit direction, spacing): the lattice of that spacing
+    through the origin, its rows along the direction, instead."""
     P = np.asarray(points, dtype=np.float64)
     S = np.asarray(segments, dtype=np.int64)
-    lo, hi = P.min(axis=0), P.max(axis=0)
-    dy = 0.5 * math.sqrt(3.0) * h
-    rows = np.arange(int(math.floor((hi[1] - lo[1]) / dy)) + 1)
-    ys = lo[1] + rows * dy
-    a, b = P[S[:, 0]], P[S[:, 1]]
+    if frame is None:
+        Q, step, axes = P, h, None
+        lo, hi = P.min(axis=0), P.max(axis=0)
+        dy = 0.5 * math.sqrt(3.0) * step
+        anchor, rows = lo, np.arange(int(math.floor((hi[1] - lo[1]) / dy)) + 1)
+    else:
+        origin, u, step = frame
+        axes = np.array([[u[0], -u[1]], [u[1], u[0]]])  # columns: u and u turned left
+        Q = (P - origin) @ axes  # the frame's coordinates
+        lo, hi = Q.min(axis=0), Q.max(axis=0)
+        dy = 0.5 * math.sqrt(3.0) * step
+        anchor, rows = np.zeros(2), np.arange(math.ceil(lo[1] / dy), math.floor(hi[1] / dy) + 1)
+    a, b = Q[S[:, 0]], Q[S[:, 1]]
     found = []
-    for j, y in zip(rows, ys):
+    for j in rows:
+        y = anchor[1] + j * dy
         xs = _crossings(a, b, y)
         if len(xs) < 2:
             continue
-        shift = 0.5 * h if j % 2 else 0.0
-        first = lo[0] + shift
+        first = anchor[0] + (0.5 * step if j % 2 else 0.0)
         for x0, x1 in zip(xs[0::2], xs[1::2]):  # inside between pairs of crossings
-            i0 = math.ceil((x0 - first) / h)
-            i1 = math.floor((x1 - first) / h)
+            i0 = math.ceil((x0 - first) / step)
+            i1 = math.floor((x1 - first) / step)
             if i1 >= i0:
-                x = first + h * np.arange(i0, i1 + 1)
-                found.append(np.column_stack([x, np.full(len(x), y)]))
+                x = first + step * np.arange(i0, i1 + 1)
+                row = np.column_stack([x, np.full(len(x), y)])
+                found.append(row if axes is None else origin + row @ axes.T)
     if not found:
         return np.zeros((0, 2))
     L = np.concatenate(found)

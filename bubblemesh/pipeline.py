@@ -142,6 +142,7 @@ FRONTAL_ELEMENTS = 1000  # frontal insertion from this many elements of the cap 
 ITERATIONS = {"centroid": 200, "frontal": 30}  # §3 force iterations by default
 ROUNDS = {"centroid": 3, "frontal": 1}  # smoothing rounds by default (the front starts regular)
 RADII_REFRESH = 10  # §3's radii follow the size field at the nodes' positions this often
+ALIGN_PIECES, ALIGN_SLACK = 4, 0.02  # the lattice along a wall cut this finely (_wall_frame)
 LATTICE_MARGIN = 4.0  # the lattice keeps this many sizes off every boundary node
 
 
@@ -340,7 +341,8 @@ def _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, 
     """§2 by frontal or centroid insertion on the refined domain ``fine`` (with
     ``seeded`` its frontal seeds or lattice), then the stable §3, the area
     bounds and the relaxed flips (module docstring)."""
-    seeds = None if not seeded else _lattice(fine, field) if frontal else _frontal_seeds(fine)
+    seeds = (None if not seeded else _lattice(fine, field, domain) if frontal
+             else _frontal_seeds(fine))
     try:
         generated = generate_sized(fine, field, progress=progress, seeds=seeds, frontal=frontal)
     except MemoryError:  # sizes far finer than the domain's extent
@@ -416,17 +418,42 @@ def _check_scale(domain, field):
                            "or split the domain, or use paper=True")
 
 
-def _lattice(domain, field):
+def _lattice(domain, field, source=None):
     """The close-packed lattice of the field's cap over the bulk of the domain
     (:mod:`bubblemesh._lattice`), refused in one line when it would not fit in
-    memory; None without a finite cap."""
+    memory; None without a finite cap.  Aligned with the longest segment of
+    ``source`` (the input domain) where :func:`_wall_frame` says so."""
     cap = float(field.cap)
     if not math.isfinite(cap):
         return None
     refuse_beyond_memory(domain.area / (math.sqrt(3) / 4 * cap * cap), "the size cap",
                          "about", f"the cap {cap:.3g} is far finer than the domain; pass a "
                          "larger size")
-    return lattice_points(domain.points, domain.segments, cap, LATTICE_MARGIN, field)
+    frame = None if source is None or not ALIGN_PIECES else _wall_frame(source, domain, cap)
+    return lattice_points(domain.points, domain.segments, cap, LATTICE_MARGIN, field, frame)
+
+
+def _wall_frame(source, fine, cap):
+    """(origin, direction, spacing) of a lattice through the first node of
+    the longest input segment, along it, as fine as its refined pieces: when
+    it is cut into at least ALIGN_PIECES of them and they are at most
+    ALIGN_SLACK shorter than the cap.  Then a domain whose walls lie on one
+    lattice (a regular hexagon, an equilateral triangle) is filled by it
+    seamlessly; else None (the lattice along x)."""
+    P, S = np.asarray(source.points), np.asarray(source.segments)
+    d = P[S[:, 1]] - P[S[:, 0]]
+    lengths = np.hypot(d[:, 0], d[:, 1])
+    k = int(np.argmax(lengths))  # the first of the longest
+    a, length = P[S[k, 0]], float(lengths[k])
+    u = d[k] / length
+    rel = np.asarray(fine.points) - a
+    along, off = rel @ u, np.abs(rel @ np.array([-u[1], u[0]]))
+    inner = (off <= 1e-9 * length) & (along > 1e-9 * length) & (along < (1 - 1e-9) * length)
+    pieces = int(inner.sum()) + 1
+    step = length / pieces
+    if pieces < ALIGN_PIECES or not (1 - ALIGN_SLACK) * cap <= step <= cap * (1 + 1e-12):
+        return None
+    return a, u, step
 
 
 def _frontal_seeds(domain):

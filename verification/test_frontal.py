@@ -122,6 +122,21 @@ def test_an_open_corner_gets_a_node_on_its_bisector(sides, divide):
     O.check_constrained_delaunay(m.points, T, m.segments)
 
 
+@pytest.mark.parametrize("sides", [3, 6])
+def test_a_domain_on_one_lattice_gets_that_lattice(sides):
+    """An equilateral triangle and a regular hexagon given by their corners:
+    their walls, cut into equal pieces, lie on one triangular lattice, and
+    the lattice start laid along the longest wall through its first node
+    fills them without a seam: every radius ratio (reference formula) at
+    least 0.99."""
+    t = 2 * np.pi * np.arange(sides) / sides
+    domain = bm.Domain.from_loops([np.column_stack([np.cos(t), np.sin(t)])])
+    m = bm.mesh(domain, max_area=domain.area / 2000)
+    q = O.radius_ratio_reference(np.asarray(m.points), np.asarray(m.triangles))
+    assert q.min() >= 0.99 and q.mean() >= 0.999
+    O.check_conforming(m.points, m.triangles, m.segments, area=domain.area, rel=1e-9)
+
+
 def _edges(T):
     return np.unique(np.sort(np.concatenate([T[:, [0, 1]], T[:, [1, 2]], T[:, [2, 0]]]), 1), axis=0)
 

@@ -4,7 +4,8 @@ the boundary's lower left corner, filtered with the exact point location of
 verification/oracles.py (strictly inside the domain), brute-force distances
 (at least margin h from every boundary node) and the size field (at its
 cap); the returned nodes must be exactly those, each within its 1e-9 h
-offset."""
+offset.  In a frame (origin, direction, spacing), the same filters on the
+lattice through the origin along that direction."""
 
 from __future__ import annotations
 
@@ -22,13 +23,23 @@ from bubblemesh.refinement import refine_boundary
 from bubblemesh.sizing import SizeField
 
 
-def _expected(P, loops, h, margin, field):
-    lo, hi = P.min(axis=0), P.max(axis=0)
-    dy = math.sqrt(3) / 2 * h
-    nodes = [(lo[0] + i * h + (0.5 * h if j % 2 else 0.0), lo[1] + j * dy)
-             for j in range(int((hi[1] - lo[1]) / dy) + 1)
-             for i in range(-1, int((hi[0] - lo[0]) / h) + 2)]
-    nodes = np.array(nodes)
+def _expected(P, loops, h, margin, field, frame=None):
+    if frame is None:
+        lo, hi = P.min(axis=0), P.max(axis=0)
+        dy = math.sqrt(3) / 2 * h
+        nodes = [(lo[0] + i * h + (0.5 * h if j % 2 else 0.0), lo[1] + j * dy)
+                 for j in range(int((hi[1] - lo[1]) / dy) + 1)
+                 for i in range(-1, int((hi[0] - lo[0]) / h) + 2)]
+        nodes = np.array(nodes)
+    else:  # every i a + j b through the origin, a = s u, b = s (u + sqrt(3) u_left) / 2
+        o, u, step = frame
+        a = step * np.asarray(u)
+        b = step * 0.5 * (np.asarray(u) + math.sqrt(3) * np.array([-u[1], u[0]]))
+        reach = int(np.hypot(*(P - o).T).max() / (0.5 * step)) + 2
+        i, j = np.meshgrid(np.arange(-2 * reach, 2 * reach + 1), np.arange(-reach, reach + 1))
+        nodes = o + i.ravel()[:, None] * a + j.ravel()[:, None] * b
+        nodes = nodes[np.all((nodes >= P.min(axis=0) - step) & (nodes <= P.max(axis=0) + step),
+                             axis=1)]
     d = np.sqrt(((nodes[:, None, :] - P[None, :, :]) ** 2).sum(-1)).min(axis=1)
     sure = np.abs(d - margin * h) > 1e-6 * h  # skip nodes on the margin's edge
     keep = [k for k in np.flatnonzero(sure & (d >= margin * h))
@@ -50,6 +61,25 @@ def test_lattice_is_the_filtered_triangular_lattice(loops, h, margin):
             unsure) else np.inf
         assert near <= 2 * JITTER * h * math.sqrt(2), f"{x} is not a lattice node kept"
     for y in want:  # and each wanted node is returned
+        assert len(got) and np.hypot(*(got - y).T).min() <= 2 * JITTER * h * math.sqrt(2), y
+
+
+@given(corner_domains(max_holes=1), st.sampled_from([0.3, 0.15]), st.floats(0.0, 2 * math.pi),
+       st.integers(0, 20), st.floats(0.9, 1.0))
+def test_a_lattice_in_a_frame_is_that_lattice_filtered(loops, h, angle, node, shrink):
+    """With a frame (origin, direction, spacing): the nodes i a + j b through
+    the origin (a = s u, b at 60 degrees to it), filtered as without."""
+    domain = bm.Domain.from_loops(loops)
+    field = SizeField.from_domain(domain, size=h)
+    fine = refine_boundary(domain, field).to_domain()
+    P = np.asarray(fine.points)
+    frame = (P[node % len(P)], np.array([math.cos(angle), math.sin(angle)]), h * shrink)
+    got = lattice_points(P, fine.segments, h, 1.5, field, frame)
+    want, unsure = _expected(P, fine.loops, h, 1.5, field, frame)
+    every = np.concatenate([want, unsure])
+    for x in got:
+        assert len(every) and np.hypot(*(every - x).T).min() <= 2 * JITTER * h * math.sqrt(2), x
+    for y in want:
         assert len(got) and np.hypot(*(got - y).T).min() <= 2 * JITTER * h * math.sqrt(2), y
 
 
