@@ -41,17 +41,14 @@ def lattice_points(points: np.ndarray, segments: np.ndarray, h: float, margin: f
     P = np.asarray(points, dtype=np.float64)
     S = np.asarray(segments, dtype=np.int64)
     if frame is None:
-        Q, step, axes = P, h, None
-        lo, hi = P.min(axis=0), P.max(axis=0)
-        dy = 0.5 * math.sqrt(3.0) * step
-        anchor, rows = lo, np.arange(int(math.floor((hi[1] - lo[1]) / dy)) + 1)
+        Q, step, axes, anchor = P, h, None, P.min(axis=0)
     else:
         origin, u, step = frame
         axes = np.array([[u[0], -u[1]], [u[1], u[0]]])  # columns: u and u turned left
-        Q = (P - origin) @ axes  # the frame's coordinates
-        lo, hi = Q.min(axis=0), Q.max(axis=0)
-        dy = 0.5 * math.sqrt(3.0) * step
-        anchor, rows = np.zeros(2), np.arange(math.ceil(lo[1] / dy), math.floor(hi[1] / dy) + 1)
+        Q, anchor = (P - origin) @ axes, np.zeros(2)  # the frame's coordinates
+    lo, hi = Q.min(axis=0), Q.max(axis=0)
+    dy = 0.5 * math.sqrt(3.0) * step
+    rows = np.arange(math.ceil((lo[1] - anchor[1]) / dy), math.floor((hi[1] - anchor[1]) / dy) + 1)
     a, b = Q[S[:, 0]], Q[S[:, 1]]
     found = []
     for j in rows:

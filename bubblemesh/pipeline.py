@@ -418,7 +418,7 @@ def _check_scale(domain, field):
                            "or split the domain, or use paper=True")
 
 
-def _lattice(domain, field, source=None):
+def _lattice(domain, field, source):
     """The close-packed lattice of the field's cap over the bulk of the domain
     (:mod:`bubblemesh._lattice`), refused in one line when it would not fit in
     memory; None without a finite cap.  Aligned with the longest segment of
@@ -429,8 +429,8 @@ def _lattice(domain, field, source=None):
     refuse_beyond_memory(domain.area / (math.sqrt(3) / 4 * cap * cap), "the size cap",
                          "about", f"the cap {cap:.3g} is far finer than the domain; pass a "
                          "larger size")
-    frame = None if source is None or not ALIGN_PIECES else _wall_frame(source, domain, cap)
-    return lattice_points(domain.points, domain.segments, cap, LATTICE_MARGIN, field, frame)
+    return lattice_points(domain.points, domain.segments, cap, LATTICE_MARGIN, field,
+                          _wall_frame(source, domain, cap))
 
 
 def _wall_frame(source, fine, cap):

@@ -186,8 +186,8 @@ def test_naca_airfoil_against_its_polynomial():
 def test_gear_and_slot_against_closed_forms():
     """The gear: 5 corners a tooth kept exactly (root and tip radii at the
     stated angles), every node between the tip circle and the root's longest
-    chord, spacing at most the
-    asked one; its area that of the corner polygon (GEOS).  The slot: nodes
+    chord, spacing at most the asked one; its area that of the corner
+    polygon (GEOS).  The slot: nodes
     on its two half circles and two sides, area 2 r L + n r^2 sin(pi / n)
     (two inscribed half polygons of n sides)."""
     shapely = pytest.importorskip("shapely")
@@ -219,7 +219,8 @@ def test_gear_and_slot_against_closed_forms():
 def test_graded_polygon_keeps_corners_and_grades():
     """Corners kept, the area the polygon's, each step no longer than the
     spacing asked at its start (stretched at most 1.5 times on the last step
-    of a side) and the finest step next to the focus."""
+    of a side) and the finest step next to the focus; sizes that would never
+    end a side refused."""
     corners = [(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)]
     L = geometry.graded_polygon(corners, (1, 1), 0.01, 0.1, 0.3)
     for c in corners:
@@ -230,6 +231,10 @@ def test_graded_polygon_keeps_corners_and_grades():
     assert (step <= 1.5 * asked + 1e-12).all()
     assert step.min() == pytest.approx(0.01, rel=1e-9)
     assert np.hypot(*(L[np.argmin(step)] - (1, 1))) < 0.011
+    for fine, coarse, growth in ((0.0, 0.1, 0.3), (0.2, 0.1, 0.3), (0.01, 0.1, -1.0),
+                                 (0.01, math.inf, 0.3)):  # each would walk forever or back
+        with pytest.raises(ValueError, match="graded_polygon"):
+            geometry.graded_polygon(corners, (1, 1), fine, coarse, growth)
 
 
 def test_quality_benchmark_domains_are_valid_regions():

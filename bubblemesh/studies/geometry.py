@@ -8,6 +8,7 @@ loop of a case is given counter-clockwise and holes clockwise, the orientation
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -151,7 +152,11 @@ def graded_polygon(corners: Sequence[Sequence[float]], focus: Sequence[float], f
     """Nodes along a closed polygon, every corner kept, spaced ``fine`` at
     the point ``focus`` and growing by ``growth`` per unit of distance from
     it, up to ``coarse``: each side walked in steps of the spacing at the
-    current node, the last step stretched to end on the corner."""
+    current node, the last step stretched to end on the corner.  ValueError
+    unless 0 < fine <= coarse and growth >= 0 (finite)."""
+    if not (0.0 < fine <= coarse < math.inf and 0.0 <= growth < math.inf):
+        raise ValueError(f"graded_polygon: need 0 < fine <= coarse and growth >= 0, all "
+                         f"finite; got fine={fine!r}, coarse={coarse!r}, growth={growth!r}")
     c = np.asarray(corners, dtype=np.float64)
     f = np.asarray(focus, dtype=np.float64)
     out = []
