@@ -78,9 +78,12 @@ KEY_BLOCK = 4096  # initial triangles keyed per parallel block
 
 @njit(cache=True, inline="always")
 def _circumcentre(ax, ay, bx, by, cx, cy):
-    """Circumcentre of triangle abc (counter-clockwise, nonzero area)."""
+    """Circumcentre of triangle abc (counter-clockwise); NaN where its area
+    rounds to 0 here (the centre is then at infinity)."""
     bx, by, cx, cy = bx - ax, by - ay, cx - ax, cy - ay
     d = 2.0 * (bx * cy - by * cx)
+    if d == 0.0:
+        return math.nan, math.nan
     b2, c2 = bx * bx + by * by, cx * cx + cy * cy
     return ax + (cy * b2 - by * c2) / d, ay + (bx * c2 - cx * b2) / d
 
@@ -213,7 +216,7 @@ def frontal_point(P, t, tri, k, h):
     ox, oy = _circumcentre(P[c, 0], P[c, 1], P[a, 0], P[a, 1], P[b, 0], P[b, 1])
     q = (ox - mx) * nx + (oy - my) * ny
     rho = max(h / SQRT3, p)
-    if q > 0.0:
+    if q > 0.0:  # False for NaN: no circle bounds a flat triangle's node
         rho = min(rho, (p * p + q * q) / (2.0 * q))
     d = rho + math.sqrt(max(rho * rho - p * p, 0.0))
     return mx + d * nx, my + d * ny

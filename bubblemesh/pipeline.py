@@ -4,7 +4,10 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
 1. Size: a graded :class:`~bubblemesh.sizing.SizeField` from the input spacing,
    the feature size and the user's ``size`` / ``max_area``; the boundary is
    split to it (:func:`~bubblemesh.refinement.refine_boundary`, input nodes kept
-   bit for bit), which makes the *refined boundary* §2.1 assumes.
+   bit for bit), which makes the *refined boundary* §2.1 assumes; the walls
+   of corners sharper than GRADE_ANGLE get nodes in geometric progression
+   from the corner (:mod:`bubblemesh._wedges`), so the wedge fills with a
+   zigzag of similar triangles instead of slivers.
 2. §2 (:func:`~bubblemesh.generation.generate_sized`): eq. 1-6 with every
    element bubble taken from the field (not eq. 3), so the interior follows
    the field: the boundary spacing growing inward at the gradation rate.  The
@@ -83,6 +86,7 @@ from ._seeds import frontal_seeds, inside
 from ._smoothing import compass_polish, guarded_smooth, stars, triangle_quality
 from ._untangle import untangle
 from ._verlet import VerletLists
+from ._wedges import SHARP_ANGLE, best_corner_ratio, corner_angles
 from .domain import Domain
 from .errors import GeometryError, MeshingError
 from .generation import generate_sized, refuse_beyond_memory
@@ -97,23 +101,7 @@ __all__ = ["QualityWarning", "RobustGenerationStats", "RobustOptimizationStats",
            "corner_angles", "best_corner_ratio", "SHARP_ANGLE"]
 
 
-def best_corner_ratio(theta):
-    """Eq. 10 of the isosceles triangle with apex angle theta (its best at a
-    corner of angle theta): 8 sin(theta / 2) sin^2((pi - theta) / 4)."""
-    theta = np.asarray(theta, dtype=np.float64)
-    return 8.0 * np.sin(theta / 2) * np.sin((np.pi - theta) / 4) ** 2
-
-
-def _sharp_angle(target: float = 0.7) -> float:
-    """The apex angle below which best_corner_ratio < target (bisection)."""
-    lo, hi = 1e-6, math.pi / 3
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if best_corner_ratio(mid) < target else (lo, mid)
-    return hi
-
-
-SHARP_ANGLE = _sharp_angle()  # ~27.2 degrees
+GRADE_ANGLE = math.radians(40.0)  # walls of sharper corners are split in geometric progression
 POOR = 0.875  # stars whose worst radius ratio is below this get the compass search
 KEEP = 0.8  # the settling passes may lower a star's worst ratio to max(mesh minimum, KEEP)
 ODT_ROUNDS = {"centroid": 1, "frontal": 0}  # each then the CDT; a front starts regular
@@ -186,25 +174,6 @@ class RobustOptimizationStats(OptimizationStats):
     flips: int = 0
     repairs: int = 0
     repair_nodes: int = 0
-
-
-def corner_angles(domain: Domain) -> np.ndarray:
-    """Interior angle (radians, in (0, 2 pi]) at every node of ``domain``, in
-    the order of ``domain.points`` (the domain lies left of its segments).  A
-    node a walk passes more than once gets its smallest wedge; the tip of a
-    crack (the walk turns back) and a free point get 2 pi: no corner there."""
-    P = np.asarray(domain.points)
-    angles = np.full(len(P), 2 * np.pi)
-    for ix in domain.loops:
-        v = P[ix]
-        to_prev = np.roll(v, 1, axis=0) - v
-        to_next = np.roll(v, -1, axis=0) - v
-        cross = to_next[:, 0] * to_prev[:, 1] - to_next[:, 1] * to_prev[:, 0]
-        dot = (to_next * to_prev).sum(axis=1)
-        wedge = np.mod(np.arctan2(cross, dot), 2 * np.pi)
-        wedge[wedge == 0.0] = 2 * np.pi  # turned back along the same segment
-        np.minimum.at(angles, np.asarray(ix), wedge)
-    return angles
 
 
 def _sharp_corner_warnings(domain: Domain) -> tuple[str, ...]:
@@ -382,7 +351,7 @@ def refined_domain(domain, field):
     """``domain`` with its segments split where ``field`` asks for it
     (:func:`bubblemesh.refinement.refine_boundary`: the input nodes first and
     unmoved, the new ones on their segments), as a Domain."""
-    refined = refine_boundary(domain, field)
+    refined = refine_boundary(domain, field, sharp_angle=GRADE_ANGLE)
     try:
         return refined.to_domain()
     except GeometryError:  # a node an ulp off its segment touches a part a few ulps away

@@ -24,17 +24,22 @@ whose length the size field h does not allow:
   off it): ``RefinedBoundary.on_segment`` marks which nodes are exact and
   ``max_deviation`` bounds the others' distance to their input segment;
 * nodes advance strictly along the segment's dominant axis; a node that cannot
-  (pieces a few ulps long) is dropped, so no two nodes coincide.
+  (pieces a few ulps long) is dropped, so no two nodes coincide;
+* with ``sharp_angle``, the walls of sharper corners first get nodes in
+  geometric progression from the corner (:mod:`bubblemesh._wedges`) and
+  the rule above splits the rest of each wall.
 """
 
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass, replace
 
 import numpy as np
 from numba import njit, prange
 
+from bubblemesh._wedges import corner_angles, wedge_parameters
 from bubblemesh.domain import Domain
 from bubblemesh.errors import GeometryError, MeshingError
 from bubblemesh.predicates import orient2d
@@ -147,27 +152,41 @@ def _graph_domain(refined: RefinedBoundary, source: Domain, marks, interior) -> 
 
 
 def refine_boundary(
-    domain_or_loops, h, *, resolution: float = 0.25, max_nodes: int = MAX_SOURCES
+    domain_or_loops, h, *, resolution: float = 0.25, max_nodes: int = MAX_SOURCES,
+    sharp_angle: float = 0.0,
 ) -> RefinedBoundary:
     """Split the boundary segments to the size ``h`` (a :class:`SizeField`, a
     positive number or a vectorised callable (n, 2) -> (n,)).
 
     ``domain_or_loops`` is a :class:`Domain` (its loops, oriented) or loops as
     :meth:`Domain.from_loops` takes them (validated, kept in the given order).
-    Raises ValueError for a bad ``h`` and when more than ``max_nodes`` samples
-    or nodes would be needed."""
-    rings = _input_rings(domain_or_loops)
+    The walls of corners sharper than ``sharp_angle`` (radians) get nodes in
+    geometric progression from the corner (:mod:`bubblemesh._wedges`), the
+    rest of them the nodes above.  Raises ValueError for a bad ``h`` and when
+    more than ``max_nodes`` samples or nodes would be needed."""
+    domain = (domain_or_loops if isinstance(domain_or_loops, Domain)
+              else Domain.from_loops(domain_or_loops))
+    rings = _input_rings(domain_or_loops, domain)
     size = h if isinstance(h, SizeField) else as_size_function(h, "h")
     if not (math.isfinite(resolution) and 0 < resolution <= 1):
         raise ValueError(f"resolution must be in (0, 1], got {resolution!r}")
+    if not (isinstance(sharp_angle, numbers.Real) and 0 <= sharp_angle <= math.pi):
+        raise ValueError(f"sharp_angle must be in [0, pi], got {sharp_angle!r}")
     a = np.concatenate(rings)
     b = np.concatenate([np.roll(ring, -1, axis=0) for ring in rings])
     source = domain_or_loops if isinstance(domain_or_loops, Domain) else None
     canon, flip = _canonical(source)
     ca, cb = (a, b) if canon is None else (a[canon], b[canon])
     length = np.hypot(*(cb - ca).T)
+    node_a = np.concatenate(domain.loops) if source is not None else np.arange(len(a))
+    node_b = np.concatenate([np.roll(ix, -1) for ix in np.split(
+        node_a, np.cumsum([len(ring) for ring in rings])[:-1])])
+    if canon is not None:
+        node_a, node_b = node_a[canon], node_b[canon]
+    graded = wedge_parameters(ca, cb, node_a, node_b, corner_angles(domain), size,
+                              float(sharp_angle))
     seg, t, values = _samples(ca, cb, length, size, resolution, max_nodes)
-    t_new, ptr = _split_parameters(seg, t, values, length, len(ca), max_nodes)
+    t_new, ptr = _split_parameters(seg, t, values, length, len(ca), max_nodes, graded)
     points, status, offset = _place(ca, cb, t_new, ptr)
     if canon is not None:  # both sides of an interior constraint get the same nodes
         points, status, offset, ptr = _expand(points, status, offset, ptr, canon, flip)
@@ -204,10 +223,10 @@ def _expand(points, status, offset, ptr, canon, slot_flip):
     return points[src], status[src], offset[src], new_ptr
 
 
-def _input_rings(domain_or_loops) -> list[np.ndarray]:
+def _input_rings(domain_or_loops, domain: Domain) -> list[np.ndarray]:
     if isinstance(domain_or_loops, Domain):
         return [np.array(domain_or_loops.points[ix]) for ix in domain_or_loops.loops]
-    domain = Domain.from_loops(domain_or_loops)  # validates; points keep the user's order
+    # from_loops validated them; its points keep the user's order
     ends = np.cumsum([len(ix) for ix in domain.loops])[:-1]
     return [np.array(ring) for ring in np.split(domain.points, ends)]
 
@@ -245,29 +264,50 @@ def _samples(a, b, length, size, resolution, max_nodes):
     return seg[order], t[order], values[order]
 
 
-def _split_parameters(seg, t, values, length, n_seg, max_nodes):
+def _split_parameters(seg, t, values, length, n_seg, max_nodes, graded):
     """Parameters of the new nodes of each segment (flat, with offsets ``ptr``):
-    n = ceil(I) pieces of equal integral ds / h, I by the trapezoid rule."""
+    the ``graded`` ones (:func:`~bubblemesh._wedges.wedge_parameters`) and,
+    over the interval [lo, hi] of t they leave, n = ceil(I) pieces of equal
+    integral ds / h, I by the trapezoid rule."""
+    fixed_seg, fixed_t, lo, hi = graded
     same = seg[1:] == seg[:-1]
     trapezoid = np.diff(t) * length[seg[:-1]] * 0.5 * (1 / values[:-1] + 1 / values[1:])
     weight = np.where(same, trapezoid, 0.0)
     cumulative = np.concatenate([[0.0], np.cumsum(weight)])
     first = np.searchsorted(seg, np.arange(n_seg), side="left")
     last = np.searchsorted(seg, np.arange(n_seg), side="right") - 1
-    integral = cumulative[last] - cumulative[first]
+    start = _integral_to(lo, seg, t, cumulative, first, last)
+    integral = _integral_to(hi, seg, t, cumulative, first, last) - start
     pieces = np.maximum(1, np.ceil(integral * (1 - 1e-12))).astype(np.int64)
-    if pieces.sum() > max_nodes:
+    if pieces.sum() + len(fixed_t) > max_nodes:
         raise MeshingError(f"refining the boundary would create more than {max_nodes} nodes: "
                            "the sizes are far finer than the boundary")
     ptr = np.concatenate([[0], np.cumsum(pieces - 1)]).astype(np.int64)
     owner = np.repeat(np.arange(n_seg), pieces - 1)
     k = np.arange(ptr[-1]) - ptr[owner] + 1
-    target = cumulative[first[owner]] + integral[owner] * k / pieces[owner]
+    target = start[owner] + integral[owner] * k / pieces[owner]
     j = np.searchsorted(cumulative, target, side="right") - 1
     j = np.clip(j, first[owner], last[owner] - 1)  # stay inside the segment's samples
     span = cumulative[j + 1] - cumulative[j]
     frac = np.clip((target - cumulative[j]) / np.where(span > 0, span, 1.0), 0.0, 1.0)
-    return t[j] + frac * (t[j + 1] - t[j]), ptr
+    t_new = t[j] + frac * (t[j + 1] - t[j])
+    if not len(fixed_t):
+        return t_new, ptr
+    owner = np.concatenate([owner, fixed_seg])
+    order = np.lexsort((np.concatenate([t_new, fixed_t]), owner))
+    ptr = np.concatenate([[0], np.cumsum(np.bincount(owner, minlength=n_seg))]).astype(np.int64)
+    return np.concatenate([t_new, fixed_t])[order], ptr
+
+
+def _integral_to(u, seg, t, cumulative, first, last):
+    """Per segment s, the running integral of ds / h at t = u[s] (linear between
+    its samples; u = 0 and u = 1 give the samples' own values exactly)."""
+    below = np.bincount(seg, weights=t < u[seg], minlength=len(u)).astype(np.int64)
+    j = np.clip(first + below - 1, first, last - 1)
+    span = t[j + 1] - t[j]
+    frac = np.clip((u - t[j]) / np.where(span > 0, span, 1.0), 0.0, 1.0)
+    inner = cumulative[j] + frac * (cumulative[j + 1] - cumulative[j])
+    return np.where(u <= 0.0, cumulative[first], np.where(u >= 1.0, cumulative[last], inner))
 
 
 @njit(cache=True, inline="always")

@@ -1,0 +1,150 @@
+"""Graded walls at sharp corners (bubblemesh._wedges) against independent checks.
+
+Oracles: the radius ratio from the triangle's angles, 2r/R = 8 sin(A/2)
+sin(B/2) sin(C/2) (law of cosines, not the code's area formula), maximised
+over a dense grid of progression ratios; the progression rule of the module
+docstring rebuilt here node by node; radius_ratio_reference and the exact
+validity checks on the final meshes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from oracles import check_valid, radius_ratio_reference
+from strategies import budget
+from test_refinement import check_refinement
+
+import bubblemesh as bm
+from bubblemesh._frontal import frontal_point
+from bubblemesh._wedges import MAX_PER_WALL, NEEDLE, SHARP_ANGLE, corner_angles, zigzag_ratio
+from bubblemesh.pipeline import GRADE_ANGLE
+from bubblemesh.refinement import refine_boundary
+
+GRID = np.linspace(1.0005, 4.0, 6000)
+
+
+def _ratio_from_angles(p, q, r):
+    """2r/R of triangles p q r (arrays of points) from their angles."""
+    a, b, c = (np.hypot(*(u - v).T) for u, v in ((q, r), (r, p), (p, q)))
+    A = np.arccos(np.clip((b * b + c * c - a * a) / (2 * b * c), -1, 1))
+    B = np.arccos(np.clip((a * a + c * c - b * b) / (2 * a * c), -1, 1))
+    return 8 * np.sin(A / 2) * np.sin(B / 2) * np.sin((np.pi - A - B) / 2)
+
+
+def _zigzag_and_corner(theta, q):
+    """The zigzag's triangle (1, 0), (q, 0), sqrt(q) e_theta and the corner's
+    (0, 0), (1, 0), sqrt(q) e_theta, for an array of q."""
+    q = np.atleast_1d(q)
+    one, origin = np.tile([1.0, 0.0], (len(q), 1)), np.zeros((len(q), 2))
+    apex = np.sqrt(q)[:, None] * [math.cos(theta), math.sin(theta)]
+    along = np.column_stack([q, np.zeros(len(q))])
+    return _ratio_from_angles(one, along, apex), _ratio_from_angles(origin, one, apex)
+
+
+@given(st.floats(math.radians(3), math.radians(45)))
+@budget(60)
+def test_the_progression_ratio_is_the_best_one(theta):
+    zig, corner = _zigzag_and_corner(theta, GRID)
+    got_zig, got_corner = (float(v[0]) for v in _zigzag_and_corner(theta, zigzag_ratio(theta)))
+    both = np.minimum(zig, corner)
+    if theta >= SHARP_ANGLE and both.max() >= 0.7:  # the corner's triangle can reach 0.7: kept
+        assert min(got_zig, got_corner) >= both.max() - 1e-6
+    else:  # it cannot: the zigzag alone
+        assert got_zig >= zig.max() - 1e-6
+
+
+def _kite(theta, length=3.0):
+    """A kite with a corner of angle theta at the origin, its other corners blunt."""
+    tip = (length * (1 + 0.3 * math.sin(theta / 2)), 0.5 * length * math.tan(theta / 2))
+    return [np.array([(0.0, 0.0), (length, 0.0), tip,
+                      (length * math.cos(theta), length * math.sin(theta))])]
+
+
+def _expected_distances(theta, h, length, offset):
+    """The graded nodes' distances from the corner (module docstring), rebuilt."""
+    q, out, k = float(zigzag_ratio(theta)), [], 0
+    while k < MAX_PER_WALL:
+        d = h * q ** (k + offset)
+        if d > 0.5 * length or (q - 1) * d > h:
+            break
+        out.append(d)
+        k += 1
+    return np.array(out)
+
+
+@pytest.mark.parametrize("degrees", [5, 12, 20, 30, 38])
+def test_walls_of_a_sharp_corner_are_graded_by_the_rule(degrees):
+    theta, h = math.radians(degrees), 0.1
+    loops = _kite(theta)
+    result = refine_boundary(loops, h, sharp_angle=GRADE_ANGLE)
+    check_refinement([np.asarray(loops[0])], result)
+    loop = result.loops[0]
+    out_wall = np.hypot(*loop[1:result.input_index[0][1]].T)  # corner -> (3, 0)
+    in_wall = np.hypot(*loop[result.input_index[0][3] + 1:][::-1].T)  # corner -> the 4th node
+    expected = [_expected_distances(theta, h, 3.0, s) for s in (0.0, 0.5)]
+    assert len(expected[0]) >= 1
+    got = sorted((out_wall, in_wall), key=lambda w: w[0])  # the half-step wall starts farther
+    for wall, want in zip(got, expected):
+        # placement may round t to 20 bits for a node exactly on the segment
+        np.testing.assert_allclose(wall[:len(want)], want, rtol=0, atol=2.0**-21 * 3.0)
+        assert np.diff(wall[len(want) - 1:]).max() <= 1.2 * h  # then the field's pieces
+
+
+def test_no_grading_above_the_angle_or_below_the_needle():
+    for degrees in (50.0, math.degrees(NEEDLE) / 2):
+        loops = _kite(math.radians(degrees))
+        graded = refine_boundary(loops, 0.1, sharp_angle=GRADE_ANGLE)
+        plain = refine_boundary(loops, 0.1)
+        np.testing.assert_array_equal(graded.loops[0], plain.loops[0])
+
+
+def _off_corner_minimum(mesh):
+    """The smallest radius ratio over triangles without a vertex at an input corner
+    too sharp for 0.7, and the smallest over all."""
+    q = radius_ratio_reference(mesh.points, mesh.triangles)
+    sharp = np.flatnonzero(corner_angles(mesh.domain) < SHARP_ANGLE)
+    sharp_points = np.asarray(mesh.domain.points)[sharp]
+    at = np.zeros(len(mesh.points), bool)
+    for p in sharp_points:
+        at |= (mesh.points == p).all(axis=1)
+    touching = at[mesh.triangles].any(axis=1)
+    return float(q[~touching].min()), float(q.min())
+
+
+@pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
+@pytest.mark.parametrize("degrees", [5, 10, 15, 20, 25, 30, 34, 38])
+@pytest.mark.parametrize("share", [100, 1000])
+def test_meshes_beside_sharp_corners_stay_above_0_7(degrees, share):
+    domain = bm.Domain.from_loops(_kite(math.radians(degrees)))
+    mesh = bm.mesh(domain, max_area=domain.area / share)
+    check_valid(mesh.points, mesh.triangles, mesh.neighbors)
+    off_corner, overall = _off_corner_minimum(mesh)
+    assert off_corner >= 0.7
+    if degrees >= math.degrees(SHARP_ANGLE):
+        assert overall >= 0.7
+
+
+@pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
+def test_two_sharp_corners_on_one_wall():
+    # a 20-20-140 triangle: the base is graded from both ends, each up to its middle
+    A = math.radians(20)
+    apex = (1.5, 1.5 * math.tan(A))
+    domain = bm.Domain.from_loops([np.array([(0.0, 0.0), (3.0, 0.0), apex])])
+    mesh = bm.mesh(domain, max_area=domain.area / 300)
+    check_valid(mesh.points, mesh.triangles, mesh.neighbors)
+    assert _off_corner_minimum(mesh)[0] >= 0.7
+
+
+def test_a_flat_triangle_gets_a_frontal_node_without_dividing_by_zero():
+    # seen from node 2, 1e17 - 1 rounds to 1e17: the circumcentre's denominator is 0
+    P = np.array([[0.0, 0.0], [1.0, 0.0], [1e17, 1e-3]])
+    tri = np.array([[0, 1, 2]], np.int64)
+    x, y = frontal_point(P, 0, tri, 2, 1.0)  # the front edge 0-1, opposite node 2
+    assert math.isfinite(x) and math.isfinite(y)
+    assert y > 0.0  # on the triangle's side of the edge
+
