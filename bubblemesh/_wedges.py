@@ -28,7 +28,7 @@ import numpy as np
 from bubblemesh.domain import Domain
 
 __all__ = ["corner_angles", "best_corner_ratio", "zigzag_ratio", "wedge_parameters",
-           "SHARP_ANGLE"]
+           "wedge_sources", "SHARP_ANGLE"]
 
 MAX_PER_WALL = 64  # graded nodes at most on one wall beside one corner
 NEEDLE = math.radians(3.0)  # sharper corners are needles: a progression would crowd them
@@ -122,21 +122,14 @@ def zigzag_ratio(theta) -> np.ndarray:
     return np.where(_both_quality(theta, both) >= 0.7, both, alone)
 
 
-def wedge_parameters(a, b, node_a, node_b, theta, size, below):
-    """Graded node parameters on segments a -> b beside corners sharper than
-    ``below`` (module docstring).
-
-    ``node_a``, ``node_b`` are the node ids of the segments' ends, ``theta`` the
-    corner angle per node id, ``size`` the element size (n, 2) -> (n,).
-    Returns (seg, t, lo, hi): parameters t in (0, 1) of the graded nodes of
-    segment seg (sorted by segment, then t), and per segment the interval
-    [lo, hi] of t left to split to the size field."""
+def _progressions(a, b, node_a, node_b, theta, size, below):
+    """Per wall end at a corner sharper than ``below`` (and not a needle): its
+    segment, whether the corner is the segment's start, the parameters u of
+    the progression's nodes from the corner (MAX_PER_WALL columns) with the
+    mask of those kept, their distances and the ratio q."""
     n = len(a)
-    lo, hi = np.zeros(n), np.ones(n)
     ends = np.concatenate([node_a, node_b])
     graded = (theta[ends] < below) & (theta[ends] >= NEEDLE)
-    if not graded.any():
-        return np.zeros(0, np.int64), np.zeros(0), lo, hi
     seg = np.concatenate([np.arange(n), np.arange(n)])[graded]
     at_start = np.arange(2 * n)[graded] < n
     node = ends[graded]
@@ -149,13 +142,28 @@ def wedge_parameters(a, b, node_a, node_b, theta, size, below):
     offset = np.empty(len(node))
     offset[order] = 0.5 * ((np.arange(len(node)) - first) % 2)
     q = zigzag_ratio(theta[node])
-    r = size(corner)
+    r = size(corner) if len(corner) else np.zeros(0)
     k = np.arange(MAX_PER_WALL)
     dist = r[:, None] * q[:, None] ** (k[None, :] + offset[:, None])
     u = dist / length[:, None]
     where = corner[:, None, :] + u[:, :, None] * away[:, None, :]
-    h = size(where.reshape(-1, 2)).reshape(u.shape)
+    h = size(where.reshape(-1, 2)).reshape(u.shape) if len(corner) else u
     fits = np.logical_and.accumulate((u <= 0.5) & ((q[:, None] - 1.0) * dist <= h), axis=1)
+    return seg, at_start, u, fits, where, (q[:, None] - 1.0) * dist
+
+
+def wedge_parameters(a, b, node_a, node_b, theta, size, below):
+    """Graded node parameters on segments a -> b beside corners sharper than
+    ``below`` (module docstring).
+
+    ``node_a``, ``node_b`` are the node ids of the segments' ends, ``theta`` the
+    corner angle per node id, ``size`` the element size (n, 2) -> (n,).
+    Returns (seg, t, lo, hi): parameters t in (0, 1) of the graded nodes of
+    segment seg (sorted by segment, then t), and per segment the interval
+    [lo, hi] of t left to split to the size field."""
+    n = len(a)
+    lo, hi = np.zeros(n), np.ones(n)
+    seg, at_start, u, fits, _, _ = _progressions(a, b, node_a, node_b, theta, size, below)
     count = fits.sum(axis=1)
     last = np.where(count > 0, u[np.arange(len(u)), np.maximum(count - 1, 0)], 0.0)
     np.maximum.at(lo, seg[at_start], last[at_start])
@@ -164,3 +172,16 @@ def wedge_parameters(a, b, node_a, node_b, theta, size, below):
     t = np.where(np.repeat(at_start, count), u[fits], 1.0 - u[fits])
     order = np.lexsort((t, owner))
     return owner[order], t[order], lo, hi
+
+
+def wedge_sources(domain: Domain, size, below):
+    """The graded nodes of ``domain``'s walls (where :func:`wedge_parameters`
+    puts them) and their spacing (q - 1) times the distance to the corner:
+    size sources that make the field follow the zigzag, so the element bubbles
+    there (eq. 3-4) are the zigzag's and not the far larger field's."""
+    node_a = np.concatenate(domain.loops)
+    node_b = np.concatenate([np.roll(ix, -1) for ix in domain.loops])
+    P = np.asarray(domain.points)
+    _, _, _, fits, where, spacing = _progressions(P[node_a], P[node_b], node_a, node_b,
+                                                  corner_angles(domain), size, below)
+    return where[fits], spacing[fits]

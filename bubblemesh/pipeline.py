@@ -86,7 +86,7 @@ from ._seeds import frontal_seeds, inside
 from ._smoothing import compass_polish, guarded_smooth, stars, triangle_quality
 from ._untangle import untangle
 from ._verlet import VerletLists
-from ._wedges import SHARP_ANGLE, best_corner_ratio, corner_angles
+from ._wedges import SHARP_ANGLE, best_corner_ratio, corner_angles, wedge_sources
 from .domain import Domain
 from .errors import GeometryError, MeshingError
 from .generation import generate_sized, refuse_beyond_memory
@@ -264,6 +264,7 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
                                       gradation=gradation)
         _check_scale(domain, field)
         fine = refined_domain(domain, field)
+        field = _with_wedges(domain, field)
     except (TypeError, ValueError) as error:
         raise type(error)(f"mesh: {error}") from None
     clock.lap("sizing")
@@ -356,6 +357,24 @@ def refined_domain(domain, field):
         return refined.to_domain()
     except GeometryError:  # a node an ulp off its segment touches a part a few ulps away
         return refined.exact_only().to_domain()
+
+
+def _with_wedges(domain, field):
+    """``field`` with sources on the graded walls of sharp corners
+    (:func:`~bubblemesh._wedges.wedge_sources`) where it has no cap, else
+    itself.  Without a cap the field beside a corner can grow far beyond the
+    zigzag's triangles (a sector with a finely sampled arc: 0.25 of its radius
+    at the tip), their element bubbles with it, and eq. 6 stops §2 early (the
+    15-degree sector: a third of its elements missing); under a cap they
+    overshoot by a few elements, and the sources would refine the corner's
+    surroundings by more than that (their cones grade at the field's rate)."""
+    if math.isfinite(field.cap):
+        return field
+    points, values = wedge_sources(domain, field, GRADE_ANGLE)
+    if not len(points):
+        return field
+    return SizeField(np.vstack([field.points, points]), np.concatenate([field.values, values]),
+                     gradation=field.gradation, cap=field.cap)
 
 
 def _frontal_wanted(insertion, domain, field):

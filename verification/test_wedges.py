@@ -148,3 +148,20 @@ def test_a_flat_triangle_gets_a_frontal_node_without_dividing_by_zero():
     assert math.isfinite(x) and math.isfinite(y)
     assert y > 0.0  # on the triangle's side of the edge
 
+
+
+@pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
+def test_a_sector_with_a_fine_arc_gets_its_count():
+    # no cap: the field grows to a quarter of the radius at the tip, far above
+    # the zigzag's triangles; their bubbles must not end §2 early (eq. 6)
+    from bubblemesh.sizing import SizeField
+    from bubblemesh.studies.quality import predicted_count
+
+    t = np.linspace(0.0, math.radians(15), 53)
+    domain = bm.Domain.from_loops([np.vstack([[(0.0, 0.0)],
+                                              np.column_stack([np.cos(t), np.sin(t)])])])
+    mesh = bm.mesh(domain)
+    check_valid(mesh.points, mesh.triangles, mesh.neighbors)
+    predicted = predicted_count(domain, SizeField.from_domain(domain)).count
+    assert abs(len(mesh.triangles) / predicted - 1) <= 0.05
+    assert _off_corner_minimum(mesh)[0] >= 0.7
