@@ -237,6 +237,30 @@ def test_graded_polygon_keeps_corners_and_grades():
             geometry.graded_polygon(corners, (1, 1), fine, coarse, growth)
 
 
+def test_sector_against_closed_forms():
+    """Tip at the origin, every other node on the arc, in order, pieces at
+    most the spacing; the area n r^2 sin(angle / n) / 2 (GEOS too); bad
+    arguments refused."""
+    shapely = pytest.importorskip("shapely")
+    angle, radius, spacing = math.radians(20.0), 2.0, 0.05
+    s = geometry.sector(radius, angle, spacing)
+    assert (s[0] == 0.0).all()
+    arc = s[1:]
+    assert np.allclose(np.hypot(*arc.T), radius, rtol=0, atol=1e-14)
+    turn = np.arctan2(arc[:, 1], arc[:, 0])
+    assert turn[0] == 0.0 and turn[-1] == pytest.approx(angle, abs=1e-15)
+    assert (np.diff(turn) > 0).all()
+    assert np.hypot(*np.diff(arc, axis=0).T).max() <= spacing
+    n = len(arc) - 1
+    expected = 0.5 * n * radius**2 * math.sin(angle / n)
+    assert geometry.signed_area(s) == pytest.approx(expected, rel=1e-12)
+    assert shapely.Polygon(s).area == pytest.approx(expected, rel=1e-12)
+    for bad in ((radius, 0.0, spacing), (radius, math.pi, spacing), (0.0, angle, spacing),
+                (radius, angle, -1.0)):
+        with pytest.raises(ValueError, match="sector"):
+            geometry.sector(*bad)
+
+
 def test_quality_benchmark_domains_are_valid_regions():
     """Every domain of the quality benchmark is a valid polygon with holes
     (GEOS) of the area bubblemesh computes; the random holes lie apart and
@@ -252,7 +276,7 @@ def test_quality_benchmark_domains_are_valid_regions():
         assert region.is_valid, name
         assert bm.Domain.from_loops(loops).area == pytest.approx(region.area, rel=1e-9), name
     for name in ("airfoil in channel", "gear", "gear, corners only", "slotted plate",
-                 "graded L-shape", "square+10 random holes"):
+                 "graded L-shape", "square+10 random holes", "20-degree sector"):
         assert name in names
     holes = [shapely.Polygon(h) for h in Q._random_holes(10, seed=3)]
     assert all(shapely.box(0.15, 0.15, 9.85, 9.85).contains(h) for h in holes)

@@ -22,6 +22,7 @@ __all__ = [
     "naca_airfoil",
     "gear",
     "slot",
+    "sector",
     "graded_polygon",
     "signed_area",
     "clockwise",
@@ -145,6 +146,18 @@ def slot(center: Sequence[float], length: float, radius: float, spacing: float) 
     top = np.array([cx + 0.5 * length, cy + radius]) + s * np.array([-length, 0.0])
     bottom = np.array([cx - 0.5 * length, cy - radius]) + s * np.array([length, 0.0])
     return clockwise(np.vstack([right, top, left, bottom]))
+
+
+def sector(radius: float, angle: float, spacing: float) -> np.ndarray:
+    """A circular sector with its tip at the origin, counter-clockwise: the
+    tip, then the arc of ``radius`` from angle 0 to ``angle`` (radians) in
+    equal pieces at most ``spacing`` long; the straight sides are not split."""
+    if not (0.0 < angle < np.pi and radius > 0.0 and spacing > 0.0):
+        raise ValueError(f"sector: need 0 < angle < pi and radius, spacing > 0, got "
+                         f"{angle!r}, {radius!r}, {spacing!r}")
+    n = max(1, math.ceil(radius * angle / spacing))
+    t = np.linspace(0.0, angle, n + 1)
+    return np.vstack([[(0.0, 0.0)], radius * np.column_stack([np.cos(t), np.sin(t)])])
 
 
 def graded_polygon(corners: Sequence[Sequence[float]], focus: Sequence[float], fine: float,

@@ -120,6 +120,7 @@ def cases(data: Path | None):
     yield "graded L-shape", [geometry.graded_polygon(
         [(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)], (1, 1), 0.01, 0.1, 0.3)], {}
     yield "square+10 random holes", [_square(10.0, 0.5)] + _random_holes(10, seed=3), {}
+    yield "20-degree sector", [geometry.sector(1.0, math.radians(20.0), 0.01)], {}
 
 
 def _random_holes(count, seed):
