@@ -8,8 +8,9 @@ ratio 0.49 next to a 20 degree corner, whatever the interior mesher does).
 Here the nodes on a wall beside such a corner lie at distances r q^(k + s)
 (k = 0, 1, ...) from it, with s = 0 on one wall and s = 1/2 on the other, so the
 wedge fills with a zigzag of similar triangles, each with one edge on a wall
-and its apex on the other.  r is the size at the corner, so the corner's own
-triangle has legs r and r sqrt(q).  q maximises the zigzag's radius ratio
+and its apex on the other.  r is the size at the corner (less where a wall is
+so short that its first node would not fit in its first half), so the
+corner's own triangle has legs r and r sqrt(q).  q maximises the zigzag's radius ratio
 (eq. 10: 0.97 at 20 degrees) and, where an isosceles corner triangle could
 reach 0.7 (SHARP_ANGLE and up), the corner triangle's too.  The progression
 stops where its spacing would exceed the size field or it reaches the middle
@@ -142,7 +143,14 @@ def _progressions(a, b, node_a, node_b, theta, size, below):
     offset = np.empty(len(node))
     offset[order] = 0.5 * ((np.arange(len(node)) - first) % 2)
     q = zigzag_ratio(theta[node])
-    r = size(corner) if len(corner) else np.zeros(0)
+    # the corner's r: its size, but small enough that every wall there gets its first node
+    first = 0.5 * length / q**offset
+    if len(corner):
+        first = np.minimum(first, size(corner))
+    at = np.unique(node, return_inverse=True)[1]
+    r = np.full(at.max(initial=-1) + 1, np.inf)
+    np.minimum.at(r, at, first)
+    r = r[at]
     k = np.arange(MAX_PER_WALL)
     dist = r[:, None] * q[:, None] ** (k[None, :] + offset[:, None])
     u = dist / length[:, None]

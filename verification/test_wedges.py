@@ -95,6 +95,20 @@ def test_walls_of_a_sharp_corner_are_graded_by_the_rule(degrees):
         assert np.diff(wall[len(want) - 1:]).max() <= 1.2 * h  # then the field's pieces
 
 
+def test_short_walls_each_get_their_first_node():
+    # walls cut at 0.1 by the input next to a 30-degree corner, h = 0.05: the
+    # half-step wall's first node must fit in its first half too, so r shrinks
+    theta, h, cut = math.radians(30), 0.05, 0.1
+    kite = _kite(theta)[0]
+    loop = np.array([kite[0], (cut, 0.0), *kite[1:], cut * np.array(kite[3]) / 3.0])
+    result = refine_boundary([loop], h, sharp_angle=GRADE_ANGLE)
+    check_refinement([loop], result)
+    near = np.sort(np.hypot(*result.loops[0].T))[1:3]
+    q = float(zigzag_ratio(theta))
+    np.testing.assert_allclose(near, [0.5 * cut / math.sqrt(q), 0.5 * cut], rtol=0,
+                               atol=2.0**-21 * 3.0)
+
+
 def test_no_grading_above_the_angle_or_below_the_needle():
     for degrees in (50.0, math.degrees(NEEDLE) / 2):
         loops = _kite(math.radians(degrees))
