@@ -43,15 +43,21 @@ def corner_angles(domain: Domain) -> np.ndarray:
     crack (the walk turns back) and a free point get 2 pi: no corner there."""
     P = np.asarray(domain.points)
     angles = np.full(len(P), 2 * np.pi)
-    for ix in domain.loops:
-        v = P[ix]
-        to_prev = np.roll(v, 1, axis=0) - v
-        to_next = np.roll(v, -1, axis=0) - v
-        cross = to_next[:, 0] * to_prev[:, 1] - to_next[:, 1] * to_prev[:, 0]
-        dot = (to_next * to_prev).sum(axis=1)
-        wedge = np.mod(np.arctan2(cross, dot), 2 * np.pi)
-        wedge[wedge == 0.0] = 2 * np.pi  # turned back along the same segment
-        np.minimum.at(angles, np.asarray(ix), wedge)
+    if not len(domain.loops):
+        return angles
+    ix = np.concatenate(domain.loops)
+    lengths = np.array([len(loop) for loop in domain.loops])
+    start = np.repeat(np.cumsum(lengths) - lengths, lengths)  # all loops at once
+    local = np.arange(len(ix)) - start
+    size = np.repeat(lengths, lengths)
+    v = P[ix]
+    to_prev = P[ix[start + (local - 1) % size]] - v
+    to_next = P[ix[start + (local + 1) % size]] - v
+    cross = to_next[:, 0] * to_prev[:, 1] - to_next[:, 1] * to_prev[:, 0]
+    dot = (to_next * to_prev).sum(axis=1)
+    wedge = np.mod(np.arctan2(cross, dot), 2 * np.pi)
+    wedge[wedge == 0.0] = 2 * np.pi  # turned back along the same segment
+    np.minimum.at(angles, ix, wedge)
     return angles
 
 

@@ -363,11 +363,9 @@ def _with_wedges(domain, field):
     """``field`` with sources on the graded walls of sharp corners
     (:func:`~bubblemesh._wedges.wedge_sources`) where it has no cap, else
     itself.  Without a cap the field beside a corner can grow far beyond the
-    zigzag's triangles (a sector with a finely sampled arc: 0.25 of its radius
-    at the tip), their element bubbles with it, and eq. 6 stops §2 early (the
-    15-degree sector: a third of its elements missing); under a cap they
-    overshoot by a few elements, and the sources would refine the corner's
-    surroundings by more than that (their cones grade at the field's rate)."""
+    zigzag's triangles, their element bubbles with it, and eq. 6 would stop
+    §2 early; under a cap the bubbles overshoot by a few elements, and the
+    sources' cones would refine the corner's surroundings by more."""
     if math.isfinite(field.cap):
         return field
     points, values = wedge_sources(domain, field, GRADE_ANGLE)

@@ -164,17 +164,18 @@ def refine_boundary(
     geometric progression from the corner (:mod:`bubblemesh._wedges`), the
     rest of them the nodes above.  Raises ValueError for a bad ``h`` and when
     more than ``max_nodes`` samples or nodes would be needed."""
-    domain = (domain_or_loops if isinstance(domain_or_loops, Domain)
-              else Domain.from_loops(domain_or_loops))
-    rings = _input_rings(domain_or_loops, domain)
+    given = isinstance(domain_or_loops, Domain)
+    domain = domain_or_loops if given else Domain.from_loops(domain_or_loops)
+    rings = _input_rings(domain, given)
     size = h if isinstance(h, SizeField) else as_size_function(h, "h")
     if not (math.isfinite(resolution) and 0 < resolution <= 1):
         raise ValueError(f"resolution must be in (0, 1], got {resolution!r}")
-    if not (isinstance(sharp_angle, numbers.Real) and 0 <= sharp_angle <= math.pi):
+    if isinstance(sharp_angle, bool) or not (
+            isinstance(sharp_angle, numbers.Real) and 0 <= sharp_angle <= math.pi):
         raise ValueError(f"sharp_angle must be in [0, pi], got {sharp_angle!r}")
     a = np.concatenate(rings)
     b = np.concatenate([np.roll(ring, -1, axis=0) for ring in rings])
-    source = domain_or_loops if isinstance(domain_or_loops, Domain) else None
+    source = domain if given else None
     canon, flip = _canonical(source)
     ca, cb = (a, b) if canon is None else (a[canon], b[canon])
     length = np.hypot(*(cb - ca).T)
@@ -223,10 +224,11 @@ def _expand(points, status, offset, ptr, canon, slot_flip):
     return points[src], status[src], offset[src], new_ptr
 
 
-def _input_rings(domain_or_loops, domain: Domain) -> list[np.ndarray]:
-    if isinstance(domain_or_loops, Domain):
-        return [np.array(domain_or_loops.points[ix]) for ix in domain_or_loops.loops]
-    # from_loops validated them; its points keep the user's order
+def _input_rings(domain: Domain, given: bool) -> list[np.ndarray]:
+    """A given domain's oriented loops, or loops as the user gave them
+    (:meth:`Domain.from_loops` keeps their points in order)."""
+    if given:
+        return [np.array(domain.points[ix]) for ix in domain.loops]
     ends = np.cumsum([len(ix) for ix in domain.loops])[:-1]
     return [np.array(ring) for ring in np.split(domain.points, ends)]
 
