@@ -27,6 +27,7 @@ import math
 import numpy as np
 
 from bubblemesh.domain import Domain
+from bubblemesh.quality import radius_ratio
 
 __all__ = ["corner_angles", "best_corner_ratio", "zigzag_ratio", "wedge_parameters",
            "wedge_sources", "SHARP_ANGLE"]
@@ -80,25 +81,33 @@ def _sharp_angle(target: float = 0.7) -> float:
 SHARP_ANGLE = _sharp_angle()  # ~26.1 degrees: no triangle at a sharper corner reaches 0.7
 
 
+def _ratios(corners):
+    """Eq. 10 of triangles given as (..., 3, 2) corner arrays."""
+    flat = np.asarray(corners, dtype=np.float64).reshape(-1, 2)
+    return radius_ratio(flat, np.arange(len(flat)).reshape(-1, 3)).reshape(corners.shape[:-2])
+
+
+def _apexes(theta, q):
+    """sqrt(q) (cos theta, sin theta), broadcast over theta and q."""
+    s = np.sqrt(q)
+    return np.stack(np.broadcast_arrays(s * np.cos(theta), s * np.sin(theta)), axis=-1)
+
+
 def _zigzag_quality(theta, q):
     """Eq. 10 of the triangle (1, 0), (q, 0), sqrt(q) (cos theta, sin theta):
     every triangle of the zigzag is similar to it."""
-    s = np.sqrt(q)
-    ax, ay = np.ones_like(q), np.zeros_like(q)
-    bx, by = q, np.zeros_like(q)
-    cx, cy = s * np.cos(theta), s * np.sin(theta)
-    la, lb, lc = np.hypot(bx - cx, by - cy), np.hypot(ax - cx, ay - cy), np.hypot(ax - bx, 0.0)
-    area = 0.5 * np.abs((bx - ax) * (cy - ay) - (by - ay) * (cx - ax))
-    return 16.0 * area**2 / ((la + lb + lc) * la * lb * lc)
+    apex = _apexes(theta, q)
+    one = np.broadcast_to([1.0, 0.0], apex.shape)
+    far = np.stack([np.broadcast_to(q, apex.shape[:-1]), np.zeros(apex.shape[:-1])], axis=-1)
+    return _ratios(np.stack([one, far, apex], axis=-2))
 
 
 def _corner_quality(theta, q):
     """Eq. 10 of the corner's own triangle (0, 0), (1, 0), sqrt(q) (cos theta,
     sin theta) where a triangle there can reach 0.7, else 1 (it cannot)."""
-    s = np.sqrt(q)
-    la, lb = np.hypot(1.0 - s * np.cos(theta), s * np.sin(theta)), s
-    area = 0.5 * s * np.sin(theta)
-    ratio = 16.0 * area**2 / ((la + lb + 1.0) * la * lb)
+    apex = _apexes(theta, q)
+    one = np.broadcast_to([1.0, 0.0], apex.shape)
+    ratio = _ratios(np.stack([np.zeros(apex.shape), one, apex], axis=-2))
     return np.where(theta < SHARP_ANGLE, 1.0, ratio)
 
 
