@@ -80,7 +80,8 @@ def repair_worst(X, T, segments, movable, limit, below, rounds, counts, halvings
     return _rounds(X, T, segments, movable, limit, rounds, pick)
 
 
-def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings, steps):
+def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings, steps,
+                  floor=None):
     """While the element count is above ``counts`` (low, high), remove the
     free node whose star is most crowded for the size field (smallest summed
     area over the areas ``size`` asks for) that can go, or failing that the
@@ -89,9 +90,10 @@ def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings
     insert a point in the sparsest triangle (an edge midpoint or its
     centroid).  Of the CANDIDATES tried per round the variant with the
     highest smallest ratio of its changed triangles (then mesh mean) is kept
-    if that ratio is not below the mesh's minimum and the area bounds hold.
-    ``size`` maps (k, 2) points to (k,) sizes; the rest and the result as
-    :func:`repair_worst`."""
+    if that ratio is not below the mesh's minimum (or ``floor``, where that
+    is lower: removals may then lower the minimum down to it) and the area
+    bounds hold.  ``size`` maps (k, 2) points to (k,) sizes; the rest and the
+    result as :func:`repair_worst`."""
     lowest = float(triangle_quality(np.asarray(X, np.float64), np.asarray(T, np.int64)).mean()
                    if len(T) else 1.0) - INNER_DROP
 
@@ -100,12 +102,12 @@ def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings
         if counts[0] <= m <= counts[1]:
             return None
         fill = _areas(X, T) / np.asarray(size(X[T].mean(axis=1)), np.float64) ** 2
-        floor = float(q.min(initial=1.0))
+        low = float(q.min(initial=1.0)) if floor is None else min(floor, q.min(initial=1.0))
         if m > counts[1]:
             crowd = np.bincount(T.ravel(), np.repeat(fill, 3), len(X))
             crowd[~free] = np.inf
             best = _best_of(X, T, q, ptr, idx, _removals(T, ptr, idx, crowd), free, limit,
-                            walls, halvings, steps, floor, None)
+                            walls, halvings, steps, low, None)
             if best is not None:
                 return best
             # the most crowded are often a wall's first row, where no node can go:
@@ -114,14 +116,14 @@ def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings
             walled[T[(~free[T]).any(axis=1)].ravel()] = True
             crowd[walled] = np.inf
             return _best_of(X, T, q, ptr, idx, _removals(T, ptr, idx, crowd), free, limit,
-                            walls, halvings, steps, floor, lowest)
+                            walls, halvings, steps, low, lowest)
         else:
             order = np.lexsort((np.arange(m), -fill))[:CANDIDATES // 4]
             tries = [(T[t], [point], -1) for t in order for point in
                      [X[T[t]].mean(axis=0)] + [0.5 * (X[T[t, k]] + X[T[t, (k + 1) % 3]])
                                                for k in range(3)]]
         return _best_of(X, T, q, ptr, idx, tries, free, limit, walls, halvings, steps,
-                        floor, None)
+                        low, None)
 
     return _rounds(X, T, segments, movable, limit, rounds, pick)
 

@@ -79,7 +79,7 @@ from ._inside import boundary_clearance
 from ._lattice import lattice_points
 from ._mesh import GenerationStats, Mesh, OptimizationStats, _half_mean_edge
 from ._odt import mean_polish, odt_smooth
-from ._patch_repair import balance_count, repair_worst
+from ._patch_repair import RISE, balance_count, repair_worst
 from ._relaxed_flips import relaxed_flips
 from ._rings import node_adjacency, ring_neighbors, vertex_triangles
 from ._seeds import frontal_seeds, inside
@@ -117,6 +117,7 @@ REPAIR_ROUNDS = 3  # compass passes on the stars the relaxed flips left below th
 RELAXED_POLISH = 3  # then mean-ratio sweeps over the nodes they changed and their neighbours
 REPAIR_BELOW = 0.9  # patches around triangles below this ratio are re-triangulated
 REPAIR_OPS = 16  # at most this many of them
+REPAIR_SPARE = 4  # or this many nodes past it, when a balance elsewhere then takes them back
 REPAIR_WINDOW = 0.035  # they keep the element count this close to the field's (or bring it closer)
 BALANCE_WINDOW = 0.03  # a count further off the field's gets nodes removed or inserted
 BALANCE_OPS = 32  # at most this many
@@ -773,8 +774,15 @@ def _repaired(mesh, max_area, field):
     patches around the worst triangles re-triangulated with one or two points
     inserted or a node removed where that raises their smallest ratio, the
     count within REPAIR_WINDOW of the field's or brought closer to it; both
-    within the area bounds.  An inserted node's radius is half its mean edge
-    (as the area bound's)."""
+    within the area bounds.  In meshes of at most BALANCE_BELOW elements the
+    repair is then continued with the count free to go REPAIR_SPARE nodes
+    further (a node
+    inserted where a corner or a row lacks one), then balanced back into
+    BALANCE_WINDOW by removals where the mesh is most crowded that keep the
+    smallest ratio above the plain repair's, and kept if it ends better
+    (:func:`_spare_kept`): a node moved, in effect, from where the field has
+    one too many to where the worst triangle needs one.  An inserted node's
+    radius is half its mean edge (as the area bound's)."""
     X, T = mesh.points, mesh.triangles
     poor = REPAIR_OPS and triangle_quality(X, T).min(initial=1.0) < REPAIR_BELOW
     if not poor and len(T) > BALANCE_BELOW:
@@ -795,19 +803,38 @@ def _repaired(mesh, max_area, field):
         movable = np.arange(len(X)) >= mesh.n_boundary
         movable[np.unique(segments)] = False
         limit = triangle_limits(X, T, N, regions, max_area) / (1.0 + AREA_MARGIN)
-        X, T, now, taken = step(X, T, segments, movable, limit, *args, MEAN_HALVINGS,
-                                MEAN_STEPS)
+        X, T, now, taken = step(X, T, segments, movable, limit, *args)
         old = np.where(now >= 0, old[np.maximum(now, 0)], -1)
         operations += taken
         if taken:
             N = _walled(T, neighbors_of(T), segments, len(X))
 
+    def window(share):
+        return asked * (1.0 - share), asked * (1.0 + share)
+
     if off:
-        run(balance_count, (asked * (1.0 - BALANCE_WINDOW), asked * (1.0 + BALANCE_WINDOW)),
-            field, BALANCE_OPS)
+        run(balance_count, window(BALANCE_WINDOW), field, BALANCE_OPS, MEAN_HALVINGS,
+            MEAN_STEPS)
     if poor:
-        run(repair_worst, REPAIR_BELOW, REPAIR_OPS,
-            (asked * (1.0 - REPAIR_WINDOW), asked * (1.0 + REPAIR_WINDOW)))
+        before = len(T)
+        run(repair_worst, REPAIR_BELOW, REPAIR_OPS, window(REPAIR_WINDOW), MEAN_HALVINGS,
+            MEAN_STEPS)
+        low, high = window(REPAIR_WINDOW)
+        blocked = not low + 2 <= len(T) <= high - 4  # two points add four triangles
+        if (REPAIR_SPARE and blocked and before <= BALANCE_BELOW
+                and abs(len(T) / asked - 1.0) <= COUNT_TOL):
+            plain = (X, T, N, old, operations)
+            plain_min = float(triangle_quality(X, T).min(initial=1.0))
+            plain_fits = abs(len(T) / asked - 1.0) <= REPAIR_WINDOW
+            floor = plain_min if plain_fits else min(plain_min, REPAIR_BELOW)
+            run(repair_worst, REPAIR_BELOW, REPAIR_OPS, (low - 2 * REPAIR_SPARE,
+                                                           high + 2 * REPAIR_SPARE),
+                MEAN_HALVINGS, MEAN_STEPS)
+            if not window(BALANCE_WINDOW)[0] <= len(T) <= window(BALANCE_WINDOW)[1]:
+                run(balance_count, window(BALANCE_WINDOW), field, BALANCE_OPS, MEAN_HALVINGS,
+                    MEAN_STEPS, floor + RISE)
+            if not _spare_kept(X, T, plain[:2], asked, floor):
+                X, T, N, old, operations = plain
     if not operations:
         return mesh
     radii = np.where(old >= 0, np.asarray(mesh.radii)[np.maximum(old, 0)],
@@ -815,6 +842,20 @@ def _repaired(mesh, max_area, field):
     stats = replace(mesh.optimization, repairs=operations, repair_nodes=len(X) - n,
                     min_ratio=_smallest_ratio(X, T))
     return replace(mesh, points=X, triangles=T, neighbors=N, radii=radii, optimization=stats)
+
+
+def _spare_kept(X, T, plain, asked, floor):
+    """Is the repair that went past REPAIR_WINDOW, then balanced, better than
+    the ``plain`` (X, T) repair within it: its count within REPAIR_WINDOW of
+    ``asked``, and a smallest ratio above the plain one's and a mean at least
+    its; or, where the plain count is outside that window, a smallest ratio of
+    at least ``floor``?"""
+    if abs(len(T) / asked - 1.0) > REPAIR_WINDOW:
+        return False
+    q, q_plain = triangle_quality(X, T), triangle_quality(*plain)
+    if abs(len(q_plain) / asked - 1.0) > REPAIR_WINDOW:
+        return bool(q.min() >= floor)
+    return bool(q.min() > q_plain.min() + RISE and q.mean() >= q_plain.mean())
 
 
 def _smallest_ratio(X, T):

@@ -239,11 +239,11 @@ def test_bm_mesh_repairs_a_hole_close_to_a_wall(monkeypatch):
     assert repaired.optimization.repair_nodes == len(repaired.points) - len(plain.points)
 
 
-def _balance(X, tri, segments, n_b, limit, counts, size, rounds=6):
+def _balance(X, tri, segments, n_b, limit, counts, size, rounds=6, floor=None):
     movable = np.arange(len(X)) >= n_b
     movable[np.unique(segments)] = False
     return balance_count(X, tri, segments, movable, limit, counts, size, rounds, HALVINGS,
-                         STEPS)
+                         STEPS, floor)
 
 
 def _uniform(h):
@@ -292,6 +292,24 @@ def test_the_count_balance_removes_the_most_crowded_node():
     np.testing.assert_allclose(O.radius_ratio_reference(Y, t), 1.0, atol=1e-9)
 
 
+@pytest.mark.parametrize("floor", [0.6, 0.8])
+def test_the_count_balance_may_go_down_to_a_floor_and_no_further(floor):
+    """In a perfect lattice every removal lowers the minimum (1.0): asked for
+    two triangles fewer, the balance removes nothing; given a lower floor it
+    removes one node and the smallest ratio stays at least that floor."""
+    X, tri, segments, n_b = _lattice_patch(4)
+    window = (0, len(tri) - 2)
+    kept = _balance(X, tri, segments, n_b, np.full(len(tri), np.inf), window, _uniform(1.0))
+    assert kept[3] == 0 and len(kept[1]) == len(tri)
+    Y, t, old, ops = _balance(X, tri, segments, n_b, np.full(len(tri), np.inf), window,
+                              _uniform(1.0), floor=floor)
+    assert ops == 1 and len(t) == len(tri) - 2 and len(Y) == len(X) - 1
+    q = O.radius_ratio_reference(Y, t)
+    assert floor <= q.min() < 1.0 - 1e-9
+    O.check_valid(Y, t)
+    O.check_conforming(Y, t, segments, area=_areas(X, tri).sum(), rel=1e-12)
+
+
 def test_the_count_balance_fills_a_sparse_gap():
     """A gap one row high has too few triangles for a unit size field: asked
     for more, the balance inserts nodes without lowering the minimum."""
@@ -326,6 +344,34 @@ def test_bm_meshes_count_is_balanced_to_the_field(monkeypatch):
     O.check_conforming(out.points, out.triangles, out.segments, area=1.0, rel=1e-9)
     assert out.optimization.repair_nodes == len(out.points) - len(m.points) < 0
     assert len(out.radii) == len(out.points)
+
+
+@pytest.mark.parametrize("max_area", [1 / 170, 1 / 200, 1 / 220])
+def test_bm_mesh_moves_a_node_to_a_right_angled_corner_it_has_no_count_for(max_area):
+    """A unit square with a triangular hole whose corner points at the outer
+    corner, at area / 170, 200 and 220: the count sits at the top of the repair's
+    window, so the plain repair cannot give the hole's corners and the
+    square's their own nodes and leaves a right-angled isosceles triangle
+    (radius ratio 2(sqrt 2 - 1)).  The repair past the window with the
+    balance after it takes a node from where the field has one too many: the
+    minimum rises above that bound, the count stays within the window of the
+    field's (the quality study's adaptive integral) and the mesh is valid and
+    conforming, the input's nodes among its boundary nodes."""
+    from bubblemesh.studies import quality as Q
+
+    outer = np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float)
+    hole = np.array([(0.1, 0.1), (0.2, 0.5), (0.5, 0.2)], float)
+    domain = bm.Domain.from_loops([outer, hole])
+    m = bm.mesh(domain, max_area=max_area * domain.area)
+    field = SizeField.from_domain(domain, size=pipeline._user_size(None,
+                                                                   max_area * domain.area))
+    predicted = Q.predicted_count(domain, field).count
+    assert abs(len(m.triangles) / predicted - 1) <= pipeline.REPAIR_WINDOW + 0.005
+    assert O.radius_ratio_reference(m.points, m.triangles).min() > 2 * (math.sqrt(2) - 1) + 1e-3
+    O.check_valid(m.points, m.triangles, m.neighbors)
+    O.check_conforming(m.points, m.triangles, m.segments, area=domain.area, rel=1e-9)
+    kept = {tuple(p) for p in m.points[:m.n_boundary]}
+    assert all(tuple(p) in kept for p in domain.points)
 
 
 def test_a_count_far_off_is_left_alone(monkeypatch):
