@@ -32,7 +32,10 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    triangles below REPAIR_BELOW are re-triangulated with a node inserted or
    removed where that lifts their worst ratio without lowering the mean
    (:mod:`bubblemesh._patch_repair`: a row one node short, as in a gap
-   between a hole and a wall, has no good positions to move to).
+   between a hole and a wall, has no good positions to move to); where the
+   count window stops that, a node is in effect moved there from where the
+   mesh is most crowded.  In meshes of at most FINAL_BELOW elements, a last
+   sweep of gradient steps on every free node's star mean (:func:`_polished`).
    After the flips the mesh is valid and conforming (every segment an edge,
    boundary nodes unmoved) but in general no longer constrained-Delaunay.  Final
    guarantee: the result's smallest radius ratio is never below the §2
@@ -124,6 +127,8 @@ BALANCE_OPS = 32  # at most this many
 BALANCE_SHARE = 0.05  # nor when the count is further off than this share of the field's
 BALANCE_BELOW = 20_000  # and only in meshes this small (in larger, 32 nodes are < 0.4%)
 BOTH_BELOW, BOTH_COUNT = 5000, 0.03  # both insertions up to this many elements (auto)
+FINAL_SWEEPS, FINAL_BELOW = 10, 20_000  # the last mean polish: sweeps, largest mesh
+FINAL_TRIES = 3  # runs of it, each holding the nodes of the triangles the last put over bounds
 COUNT_TOL = 0.05  # a count this close to the size field's fits it
 MIN_ENOUGH = 0.9  # a mesh whose minimum stays above this is ranked by its mean
 UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
@@ -342,8 +347,8 @@ def _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, 
                            odt_rounds=ODT_ROUNDS[gen.insertion])[:2]
 
         # Triangle's -a, global and regional: hard bounds
-        return _repaired(_relaxed(bound_areas(mesh, max_area, settle=settle), max_area),
-                         max_area, field)
+        return _polished(_repaired(_relaxed(bound_areas(mesh, max_area, settle=settle),
+                                            max_area), max_area, field), max_area)
     except MemoryError:  # sizes far finer than the domain's extent
         raise MeshingError("mesh: not enough memory to optimise the mesh this size field "
                            "asks for (sizes far finer than the domain)") from None
@@ -842,6 +847,41 @@ def _repaired(mesh, max_area, field):
     stats = replace(mesh.optimization, repairs=operations, repair_nodes=len(X) - n,
                     min_ratio=_smallest_ratio(X, T))
     return replace(mesh, points=X, triangles=T, neighbors=N, radii=radii, optimization=stats)
+
+
+def _polished(mesh, max_area):
+    """The very last step: FINAL_SWEEPS sweeps of gradient steps on the star
+    mean radius ratio (eq. 10; :func:`~bubblemesh._odt.mean_polish`) of every
+    free node, a star's worst ratio never taken below the mesh's minimum or
+    KEEP, the larger (the nodes of triangles below KEEP stay: those triangles
+    stay as they are and no other falls below KEEP), in meshes of at most
+    FINAL_BELOW elements; kept if every triangle keeps its area bound, else
+    run again with the nodes of those that broke it held (FINAL_TRIES runs at
+    most).  The
+    steps before polish only the stars they changed, and the flips and
+    repairs leave their surroundings short of the stars' optimum."""
+    X, T = np.array(mesh.points), np.asarray(mesh.triangles)
+    if not FINAL_SWEEPS or len(T) > FINAL_BELOW:
+        return mesh
+    movable = np.arange(len(X)) >= mesh.n_boundary
+    movable[np.unique(np.asarray(mesh.segments))] = False
+    q = triangle_quality(X, T)
+    floor = max(float(q.min(initial=1.0)), KEEP)
+    movable[T[q < floor].ravel()] = False
+    ptr, idx = stars(T, len(X))
+    limit = triangle_limits(X, T, mesh.neighbors, getattr(mesh.domain, "regions", None),
+                            max_area) / (1.0 + AREA_MARGIN)
+    for _ in range(FINAL_TRIES):
+        Y = X.copy()
+        if not mean_polish(Y, T, ptr, idx, mesh.n_boundary, FINAL_SWEEPS, movable, floor,
+                           MEAN_HALVINGS, 1.0, MEAN_STEPS):
+            break
+        over = _areas(Y, T) > limit
+        if not over.any():
+            stats = replace(mesh.optimization, min_ratio=_smallest_ratio(Y, T))
+            return replace(mesh, points=Y, optimization=stats)
+        movable[T[over].ravel()] = False  # and again, those triangles' nodes held
+    return mesh
 
 
 def _spare_kept(X, T, plain, asked, floor):
