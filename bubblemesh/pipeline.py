@@ -47,9 +47,9 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    best of the three returned (:func:`_better`: fewest elements below 0.7,
    then a count within COUNT_TOL of the size field's
    (:func:`~bubblemesh.sizing.field_count`), then a higher mean with no lower
-   minimum): on small domains either insertion can win by where its seams
-   fall, and where walls dominate the seeds' first row can overshoot the
-   field's count.
+   minimum, means within MEAN_TIE ranked by their minimum): on small
+   domains either insertion can win by where its seams fall, and where walls
+   dominate the seeds' first row can overshoot the field's count.
 5. Corners sharper than :data:`SHARP_ANGLE` (where no triangle can reach a
    radius ratio of 0.7) are reported: a :class:`QualityWarning` and the
    ``warnings`` field of the returned mesh's generation record.
@@ -127,9 +127,11 @@ BALANCE_OPS = 32  # at most this many
 BALANCE_SHARE = 0.05  # nor when the count is further off than this share of the field's
 BALANCE_BELOW = 20_000  # and only in meshes this small (in larger, 32 nodes are < 0.4%)
 BOTH_BELOW, BOTH_COUNT = 5000, 0.03  # both insertions up to this many elements (auto)
+OTHERS = ((True, True), (False, False))  # the other (frontal, seeded) meshes tried then
 FINAL_SWEEPS, FINAL_BELOW = 10, 20_000  # the last mean polish: sweeps, largest mesh
 FINAL_TRIES = 3  # runs of it, each holding the nodes of the triangles the last put over bounds
 COUNT_TOL = 0.05  # a count this close to the size field's fits it
+MEAN_TIE = 1e-4  # means closer than this are a tie, broken by the minimum
 MIN_ENOUGH = 0.9  # a mesh whose minimum stays above this is ranked by its mean
 UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
 FRONTAL_ELEMENTS = 1000  # frontal insertion from this many elements of the cap size up
@@ -287,7 +289,7 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
                       options)
     if insertion == "auto" and not frontal and len(mesh.triangles) <= BOTH_BELOW:
         asked = field_count(field, mesh.points, mesh.triangles)
-        for other_frontal, seeded in ((True, True), (False, False)):
+        for other_frontal, seeded in OTHERS:
             other = _mesh_with(domain, fine, field, other_frontal, seeded, notes, max_area,
                                progress, clock, options)
             if _better(other, mesh, asked):
@@ -298,9 +300,10 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
 def _better(a, b, asked):
     """Is mesh a better than b: fewer triangles below a radius ratio (eq. 10)
     of 0.7; or as many, and a's count within COUNT_TOL of ``asked`` (the
-    field's) where b's is not; or both or neither within it, a higher mean
-    ratio, a minimum at least b's (or at least MIN_ENOUGH) and a count within
-    BOTH_COUNT of b's (quality is not bought with elements)?"""
+    field's) where b's is not; or both or neither within it, a count within
+    BOTH_COUNT of b's (quality is not bought with elements) and a mean ratio
+    higher by more than MEAN_TIE with a minimum at least b's (or at least
+    MIN_ENOUGH), or a mean within MEAN_TIE of b's and a higher minimum?"""
     qa, qb = a.quality(), b.quality()
     poor_a, poor_b = int((qa < 0.7).sum()), int((qb < 0.7).sum())
     if poor_a != poor_b:
@@ -308,8 +311,11 @@ def _better(a, b, asked):
     fits_a, fits_b = (abs(len(q) / asked - 1.0) <= COUNT_TOL for q in (qa, qb))
     if fits_a != fits_b:
         return fits_a
-    return bool(abs(len(qa) / len(qb) - 1.0) <= BOTH_COUNT and qa.mean() > qb.mean()
-                and qa.min() >= min(qb.min(), MIN_ENOUGH))
+    if abs(len(qa) / len(qb) - 1.0) > BOTH_COUNT:
+        return False
+    if abs(qa.mean() - qb.mean()) <= MEAN_TIE:
+        return bool(qa.min() > qb.min())
+    return bool(qa.mean() > qb.mean() and qa.min() >= min(qb.min(), MIN_ENOUGH))
 
 
 def _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, clock,

@@ -440,7 +440,8 @@ def test_the_portfolio_ranking_follows_its_rule():
     """bm.mesh's choice between its small-domain meshes, case by case from
     the documented rule: fewer elements below 0.7 first, then a count that
     fits the field, then a higher mean with a minimum that is at least the
-    other's or at least MIN_ENOUGH, at a count within BOTH_COUNT."""
+    other's or at least MIN_ENOUGH, at a count within BOTH_COUNT; means
+    within MEAN_TIE ranked by their minimum."""
     better, enough = pipeline._better, pipeline.MIN_ENOUGH
     n = 100
     base = _Rated(*([0.95] * (n - 1) + [0.85]))
@@ -459,3 +460,13 @@ def test_the_portfolio_ranking_follows_its_rule():
     # a higher mean bought with more than BOTH_COUNT more elements: no
     more = int(n * (1 + pipeline.BOTH_COUNT)) + 1  # still within COUNT_TOL of n
     assert not better(_Rated(*([0.96] * more)), base, n)
+    # means within MEAN_TIE: the higher minimum wins, whichever mean is higher
+    tie = pipeline.MEAN_TIE
+    lower_min = _Rated(*([0.99] * (n - 1) + [0.91]))
+    shift = 0.5 * tie * n / (n - 1)  # the mean moves by tie / 2
+    higher_min = _Rated(*([0.99 - shift] * (n - 1) + [0.92]))
+    assert abs(lower_min.ratios.mean() - higher_min.ratios.mean()) < tie
+    assert better(higher_min, lower_min, n) and not better(lower_min, higher_min, n)
+    # beyond it, the higher mean with a minimum above MIN_ENOUGH still wins
+    ahead = _Rated(*([0.99 + 6 * shift] * (n - 1) + [0.91]))
+    assert better(ahead, higher_min, n) and not better(higher_min, ahead, n)
