@@ -54,6 +54,7 @@ def _check_polish(before, after, max_area):
     return q0, q
 
 
+@pytest.mark.slow
 @given(corner_domains(max_holes=2), st.sampled_from([100, 300]), st.booleans())
 def test_the_polish_moves_only_free_nodes_and_lowers_neither_minimum_nor_mean(
         loops, share, bounded):
@@ -149,6 +150,7 @@ def test_the_nodes_of_a_triangle_below_keep_stay_where_they_are(monkeypatch):
     _check_polish(pulled, after, None)
 
 
+@pytest.mark.slow
 def test_a_polish_that_breaks_an_area_bound_is_run_again_without_those_nodes(monkeypatch):
     """The corners-only gear at area / 1000: the first polish takes a
     triangle over max_area; run again with that triangle's nodes held, it
