@@ -775,22 +775,22 @@ def _relaxed(mesh, max_area):
 
 
 def _repaired(mesh, max_area, field):
-    """The very last step (:mod:`bubblemesh._patch_repair`): in a mesh of at
-    most BALANCE_BELOW elements, while the element count is more than
-    BALANCE_WINDOW off the count ``field`` asks for
+    """The repair before the last polish (:mod:`bubblemesh._patch_repair`).
+
+    In a mesh of at most BALANCE_BELOW elements, while the element count is
+    more than BALANCE_WINDOW off the count ``field`` asks for
     (:func:`~bubblemesh.sizing.field_count`) and BALANCE_OPS nodes can bring
     it into that window (it is at most BALANCE_SHARE of that count outside),
-    a node removed where the mesh is most crowded (inserted where it is
-    sparsest) without lowering its minimum; then the
-    patches around the worst triangles re-triangulated with one or two points
-    inserted or a node removed where that raises their smallest ratio, the
-    count within REPAIR_WINDOW of the field's or brought closer to it; both
-    within the area bounds.  In meshes of at most BALANCE_BELOW elements the
-    repair is then continued with the count free to go REPAIR_SPARE nodes
-    further (a node
-    inserted where a corner or a row lacks one), then balanced back into
-    BALANCE_WINDOW by removals where the mesh is most crowded that keep the
-    smallest ratio above the plain repair's, and kept if it ends better
+    a node is removed where the mesh is most crowded (inserted where it is
+    sparsest) without lowering its minimum.  Then the patches around the
+    worst triangles are re-triangulated with one or two points inserted or a
+    node removed where that raises their smallest ratio, the count within
+    REPAIR_WINDOW of the field's or brought closer to it; both within the area
+    bounds.  In meshes of at most BALANCE_BELOW elements the repair then goes
+    on with the count free to go REPAIR_SPARE nodes further (a node inserted
+    where a corner or a row lacks one), is balanced back into BALANCE_WINDOW
+    by removals where the mesh is most crowded that keep the smallest ratio
+    above the plain repair's, and is kept if it ends better
     (:func:`_spare_kept`): a node moved, in effect, from where the field has
     one too many to where the worst triangle needs one.  An inserted node's
     radius is half its mean edge (as the area bound's)."""
@@ -858,14 +858,15 @@ def _repaired(mesh, max_area, field):
 def _polished(mesh, max_area):
     """The very last step: FINAL_SWEEPS sweeps of gradient steps on the star
     mean radius ratio (eq. 10; :func:`~bubblemesh._odt.mean_polish`) of every
-    free node, a star's worst ratio never taken below the mesh's minimum or
-    KEEP, the larger (the nodes of triangles below KEEP stay: those triangles
-    stay as they are and no other falls below KEEP), in meshes of at most
-    FINAL_BELOW elements; kept if every triangle keeps its area bound, else
-    run again with the nodes of those that broke it held (FINAL_TRIES runs at
-    most).  The
-    steps before polish only the stars they changed, and the flips and
-    repairs leave their surroundings short of the stars' optimum."""
+    free node, in meshes of at most FINAL_BELOW elements.
+
+    A star's worst ratio is never taken below the mesh's minimum or KEEP, the
+    larger; the nodes of triangles below KEEP are held, so those triangles
+    stay as they are and no other falls below KEEP.  The result is kept if
+    every triangle keeps its area bound, else run again with the nodes of
+    those that broke it held (FINAL_TRIES runs at most).  The steps before
+    polish only the stars they changed, and the flips and repairs leave their
+    surroundings short of the stars' optimum."""
     X, T = np.array(mesh.points), np.asarray(mesh.triangles)
     if not FINAL_SWEEPS or len(T) > FINAL_BELOW:
         return mesh

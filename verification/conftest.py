@@ -17,7 +17,9 @@ Tests with their own expensive bodies scale their budget with
 
 Markers: ``peers`` (needs triangle / scipy / trimesh; those tests call
 ``pytest.importorskip`` so they skip with a reason where a peer is missing)
-and ``slow`` (deselect with ``-m "not slow"``).
+``slow`` (deselect with ``-m "not slow"``), and ``heavy``: whole meshes of
+awkward inputs that take minutes when the kernels run as plain Python and add
+nothing there the jitted environments lack (tox -e nojit deselects them).
 """
 
 from __future__ import annotations
@@ -51,6 +53,7 @@ def pytest_configure(config):
         "markers", "peers: needs a peer library (triangle, scipy, trimesh); skipped if missing"
     )
     config.addinivalue_line("markers", "slow: expensive; deselect with -m 'not slow'")
+    config.addinivalue_line("markers", "heavy: minutes as plain Python; deselected by tox -e nojit")
 
 
 def pytest_report_header(config):

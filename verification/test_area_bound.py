@@ -8,8 +8,9 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
 from hypothesis import strategies as st
+from strategies import budget
 
 import bubblemesh as bm
 import bubblemesh.pipeline as pipeline
@@ -89,7 +90,7 @@ def test_global_and_regional_bounds_combine_by_min():
     assert all(a <= bound[r] for a, r in zip(exact_areas(mesh), region.tolist()))
 
 
-@settings(max_examples=6, deadline=None)
+@budget(6)
 @given(st.integers(3, 9), st.integers(3, 9), st.sampled_from([0.05, 0.13, 0.4]))
 def test_global_max_area_is_a_hard_bound(w, h, max_area):
     outer = np.array([(0, 0), (w, 0), (w, h), (0, h)], float)

@@ -314,6 +314,7 @@ def test_the_field_count_is_the_integral_of_the_element_density():
     assert abs(total / exact - 1) < 1e-3
 
 
+@pytest.mark.heavy
 def test_segments_ulps_apart_do_not_ask_for_a_zero_size():
     """A fuzz case (seed 236, ulp-jittered): a hole node a few ulps from the
     outer loop made the feature size 0 and the size field refuse its own
@@ -326,7 +327,7 @@ def test_segments_ulps_apart_do_not_ask_for_a_zero_size():
     assert fuzz.check_against_input(mesh, domain) == ""
 
 
-@pytest.mark.parametrize("seed", [1697, 2022, 2232])
+@pytest.mark.parametrize("seed", [pytest.param(1697, marks=pytest.mark.heavy), 2022, 2232])
 def test_far_from_the_origin_no_two_nodes_meet(seed):
     """Fuzz cases offset by 1e6 ... 1e15: the forces moved two nodes onto one
     float position and the re-triangulation failed; now a valid mesh."""
@@ -359,7 +360,7 @@ def test_crack_tips_and_free_points_are_not_sharp_corners():
         bm.mesh(d)
 
 
-@pytest.mark.parametrize("seed", [755, 6859])
+@pytest.mark.parametrize("seed", [pytest.param(755, marks=pytest.mark.heavy), 6859])
 def test_near_degenerate_inputs_give_a_mesh_or_a_meshing_error(seed):
     """Fuzz cases: a hole node an ulp from a non-adjacent segment asked for
     sizes of 1e-10 and §2 ran for minutes (755); a mutated .poly asked for more

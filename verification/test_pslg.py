@@ -9,8 +9,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
 from hypothesis import strategies as st
+from strategies import budget
 
 import bubblemesh as bm
 from bubblemesh.errors import GeometryError
@@ -245,7 +246,8 @@ def on_segment_graphs(draw):
     return a, b, on, free
 
 
-@settings(max_examples=30, deadline=None)
+@pytest.mark.heavy
+@budget(30)
 @given(on_segment_graphs())
 def test_vertices_exactly_on_a_segment_split_it(graph):
     a, b, on, free = graph
@@ -305,7 +307,7 @@ def graphs(draw):
     return box, [P[list(e)] for e in picks], P
 
 
-@settings(max_examples=25, deadline=None)
+@budget(25)
 @given(graphs())
 def test_constrained_delaunay_with_interior_constraints_is_exact(graph):
     box, constraints, free = graph
@@ -329,7 +331,7 @@ def test_constrained_delaunay_with_interior_constraints_is_exact(graph):
             assert in_circle(P[row[0]], P[row[1]], P[row[2]], P[w]) <= 0
 
 
-@settings(max_examples=8, deadline=None)
+@budget(8)
 @given(graphs())
 def test_default_mesher_honours_interior_constraints_and_free_points(graph):
     box, constraints, free = graph
