@@ -137,6 +137,7 @@ def test_a_bound_not_reached_names_the_region():
         bound_areas(coarse, rounds=1)
 
 
+@pytest.mark.heavy
 def test_split_segments_keep_the_boundary_first_and_their_markers(seen, monkeypatch):
     d = bm.Domain.from_pslg(loops=[SQUARE], constraints=[WALL], regions=[LEFT, RIGHT],
                             markers=[1, 5])

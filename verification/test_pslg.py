@@ -416,6 +416,7 @@ def test_shapely_multipolygon_lines_and_points():
     assert cover.symmetric_difference(two).area <= 1e-9 * two.area
 
 
+@pytest.mark.heavy
 def test_region_max_area_bounds_the_mean_element_area():
     left, right = (1.0, 4.0, 0.0, 0.02), (7.0, 4.0, 1.0, 0.5)
     wall = np.array([(4, 0), (4, 8)], float)
