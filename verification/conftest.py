@@ -16,7 +16,7 @@ Tests with their own expensive bodies scale their budget with
 ``strategies.budget(n)`` so that ``thorough`` also runs them harder.
 
 Markers: ``peers`` (needs triangle / scipy / trimesh; those tests call
-``pytest.importorskip`` so they skip with a reason where a peer is missing)
+``pytest.importorskip`` so they skip with a reason where a peer is missing),
 ``slow`` (deselect with ``-m "not slow"``), and ``heavy``: whole meshes of
 awkward inputs that take minutes when the kernels run as plain Python and add
 nothing there the jitted environments lack (tox -e nojit deselects them).
