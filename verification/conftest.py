@@ -9,17 +9,19 @@ Hypothesis profiles (select with HYPOTHESIS_PROFILE=<name>; default ``ci``):
   failure found once is replayed first.
 - ``thorough``: ten times the ``ci`` budget, random seeds; for nightly or
   pre-release runs.
-- ``nojit``: the default when NUMBA_DISABLE_JIT is set (kernels run as plain
-  Python): a fifth of ``ci``, still derandomized.
+- ``quick``: a fifth of ``ci``, still derandomized; the default when
+  NUMBA_DISABLE_JIT is set (kernels run as plain Python), and tox's ``oldest``
+  (which checks that the lower bounds work, not hunting bugs).
 
 Tests with their own expensive bodies scale their budget with
 ``strategies.budget(n)`` so that ``thorough`` also runs them harder.
 
 Markers: ``peers`` (needs triangle / scipy / trimesh; those tests call
 ``pytest.importorskip`` so they skip with a reason where a peer is missing),
-``slow`` (deselect with ``-m "not slow"``), and ``heavy``: whole meshes of
-awkward inputs that take minutes when the kernels run as plain Python and add
-nothing there the jitted environments lack (tox -e nojit deselects them).
+``slow`` (deselect with ``-m "not slow"``), and ``heavy``: whole meshes (many
+random domains, fine or awkward inputs, campaigns in worker processes) that
+take a minute or more each when the kernels run as plain Python; tox's nojit
+and oldest deselect them, the jitted environments run them.
 """
 
 from __future__ import annotations
@@ -41,10 +43,9 @@ _common = dict(
 settings.register_profile("ci", max_examples=100, derandomize=True, database=None, **_common)
 settings.register_profile("dev", max_examples=30, **_common)
 settings.register_profile("thorough", max_examples=1000, **_common)
-# kernels as plain Python (tox -e nojit) are far slower: a fifth of ci
-settings.register_profile("nojit", max_examples=20, derandomize=True, database=None, **_common)
+settings.register_profile("quick", max_examples=20, derandomize=True, database=None, **_common)
 _NOJIT = os.environ.get("NUMBA_DISABLE_JIT", "0") not in ("", "0")
-PROFILE = os.environ.get("HYPOTHESIS_PROFILE") or ("nojit" if _NOJIT else "ci")
+PROFILE = os.environ.get("HYPOTHESIS_PROFILE") or ("quick" if _NOJIT else "ci")
 settings.load_profile(PROFILE)
 
 
@@ -53,7 +54,9 @@ def pytest_configure(config):
         "markers", "peers: needs a peer library (triangle, scipy, trimesh); skipped if missing"
     )
     config.addinivalue_line("markers", "slow: expensive; deselect with -m 'not slow'")
-    config.addinivalue_line("markers", "heavy: minutes as plain Python; deselected by tox -e nojit")
+    config.addinivalue_line(
+        "markers", "heavy: minutes as plain Python; deselected by tox -e nojit and -e oldest"
+    )
 
 
 def pytest_report_header(config):

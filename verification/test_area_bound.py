@@ -121,6 +121,7 @@ def test_paper_mode_ignores_max_area():
         assert np.array_equal(a.triangles, b.triangles)
 
 
+@pytest.mark.heavy
 def test_without_a_bound_the_mesh_is_returned_as_it_is():
     d = replace(two_regions(), regions=np.array([LEFT[:3] + (0.0,), RIGHT[:3] + (-1.0,)]))
     mesh = bm.mesh(d, size=1.0)

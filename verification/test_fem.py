@@ -185,6 +185,7 @@ def xdmf_items(path):
     return out
 
 
+@pytest.mark.heavy
 def test_xdmf_pair_carries_regions_and_facet_tags(tmp_path):
     meshio = pytest.importorskip("meshio")
     mesh = bm.mesh(two_materials(), size=0.1)

@@ -280,6 +280,7 @@ def test_mesh_records_its_insertion():
         assert np.array_equal(small.points, again.points)
 
 
+@pytest.mark.heavy
 @given(corner_domains(max_holes=2))
 def test_frontal_mesh_is_valid_conforming_and_never_worse_than_its_generation(loops):
     domain = bm.Domain.from_loops(loops)
@@ -294,6 +295,7 @@ def test_frontal_mesh_is_valid_conforming_and_never_worse_than_its_generation(lo
     assert m.generation.seeds > 0
 
 
+@pytest.mark.heavy
 def test_frontal_mesh_is_deterministic():
     domain = bm.Domain.from_loops(_disk(48))
     one = bm.mesh(domain, size=0.12, insertion="frontal")

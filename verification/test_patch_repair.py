@@ -45,6 +45,7 @@ def _repair(X, tri, segments, n_b, limit, below=1.0, rounds=8, counts=EVERY):
     return repair_worst(X, tri, segments, movable, limit, below, rounds, counts, HALVINGS, STEPS)
 
 
+@pytest.mark.heavy
 @given(corner_domains(max_holes=2), st.sampled_from([0.3, 0.2]), st.booleans(),
        st.floats(0.0, 0.06), st.integers(0, 2**32 - 1))
 def test_repairs_keep_the_mesh_valid_conforming_and_within_its_bounds(loops, size, bounded,
@@ -94,6 +95,7 @@ def _changed(X0, tri0, X, tri):
     return (np.array([k not in new for k in before]), np.array([k not in old for k in after]))
 
 
+@pytest.mark.heavy
 @given(st.sampled_from([0.3, 0.2]), st.integers(0, 3), st.integers(0, 2**32 - 1))
 def test_on_bm_meshes_the_repairs_keep_the_mean_within_its_budget(size, holes, seed):
     """bm.mesh's own output (its repair off), repaired at every ratio: the
@@ -250,6 +252,7 @@ def _uniform(h):
     return lambda P: np.full(len(P), h)
 
 
+@pytest.mark.heavy
 @given(corner_domains(max_holes=2), st.sampled_from([0.3, 0.2]), st.booleans(),
        st.sampled_from([-1, 1]), st.integers(1, 12), st.integers(0, 2**32 - 1))
 def test_the_count_balance_moves_the_count_toward_its_window_and_keeps_the_minimum(
@@ -346,6 +349,7 @@ def test_bm_meshes_count_is_balanced_to_the_field(monkeypatch):
     assert len(out.radii) == len(out.points)
 
 
+@pytest.mark.heavy
 @pytest.mark.parametrize("max_area", [1 / 170, 1 / 200, 1 / 220])
 def test_bm_mesh_moves_a_node_to_a_right_angled_corner_it_has_no_count_for(max_area):
     """A unit square with a triangular hole whose corner points at the outer
@@ -386,6 +390,7 @@ def test_a_count_far_off_is_left_alone(monkeypatch):
     assert pipeline._repaired(m, None, coarser) is m
 
 
+@pytest.mark.heavy
 def test_bm_mesh_splits_a_gears_corners_and_pays_for_them_off_the_walls():
     """A gear given by its corners, meshed at area / 1000: its tooth walls are
     split finer than the field, so the 24 tip corners get a node each and the

@@ -57,6 +57,7 @@ def _keeps_input_nodes(m, domain):
     assert not missing, f"input nodes not kept bitwise: {missing[:3]}"
 
 
+@pytest.mark.heavy
 @given(corner_domains(), st.sampled_from([None, 0.3, 0.15]))
 def test_corner_only_domains_mesh_valid_and_conforming(loops, size):
     domain = bm.Domain.from_loops(loops)
@@ -112,6 +113,7 @@ def test_a_size_function_smaller_in_the_middle_is_honoured():
     assert centre.sum() >= 0.5 * math.pi * 0.1**2 / (math.sqrt(3) / 4 * 0.045**2) / 2
 
 
+@pytest.mark.heavy
 def test_max_area_bounds_the_triangle_areas():
     area = 0.002
     m = bm.mesh(bm.Domain.from_loops([[(0, 0), (1, 0), (1, 1), (0, 1)]]), max_area=area)
@@ -327,7 +329,8 @@ def test_segments_ulps_apart_do_not_ask_for_a_zero_size():
     assert fuzz.check_against_input(mesh, domain) == ""
 
 
-@pytest.mark.parametrize("seed", [pytest.param(1697, marks=pytest.mark.heavy), 2022, 2232])
+@pytest.mark.parametrize("seed", [pytest.param(1697, marks=pytest.mark.heavy), 2022,
+                                  pytest.param(2232, marks=pytest.mark.heavy)])
 def test_far_from_the_origin_no_two_nodes_meet(seed):
     """Fuzz cases offset by 1e6 ... 1e15: the forces moved two nodes onto one
     float position and the re-triangulation failed; now a valid mesh."""

@@ -123,6 +123,7 @@ def test_la_regions_are_the_faces_holding_the_region_points():
 SQUARE = np.array([(0, 0), (8, 0), (8, 8), (0, 8)], float)
 
 
+@pytest.mark.heavy
 def test_crack_interface_and_free_points_are_kept():
     crack = np.array([(1, 1), (3, 2), (5, 2)], float)  # open polyline
     ring = np.array([(5, 5), (7, 5), (7, 7), (5, 7), (5, 5)], float)  # closed interface
@@ -269,6 +270,7 @@ def test_vertices_exactly_on_a_segment_split_it(graph):
         assert_chain(mesh.points, mesh.triangles, u, v)
 
 
+@pytest.mark.heavy
 def test_vertices_on_a_loop_side_split_it():
     box = np.array([(0, 0), (64, 0), (64, 64), (0, 64)], float)
     on = [(16, 0), (40, 0), (64, 32), (10, 54)]  # (10, 54) on the diagonal constraint
@@ -331,6 +333,7 @@ def test_constrained_delaunay_with_interior_constraints_is_exact(graph):
             assert in_circle(P[row[0]], P[row[1]], P[row[2]], P[w]) <= 0
 
 
+@pytest.mark.heavy
 @budget(8)
 @given(graphs())
 def test_default_mesher_honours_interior_constraints_and_free_points(graph):

@@ -17,6 +17,7 @@ from fractions import Fraction
 
 import numpy as np
 import oracles as O
+import pytest
 import strategies as S
 from hypothesis import given
 from hypothesis import strategies as st
@@ -440,6 +441,7 @@ print(h.hexdigest())
 """
 
 
+@pytest.mark.heavy
 def test_the_settled_mesh_is_the_same_bits_at_any_thread_count():
     digests = set()
     for threads in ("1", "2"):

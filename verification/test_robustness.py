@@ -33,7 +33,9 @@ def _offset_square():
     return [ring + 1e15]
 
 
-@pytest.mark.parametrize("loops", [*_ON_VERTEX.values(), _offset_square()],
+@pytest.mark.parametrize("loops", [pytest.param(_ON_VERTEX["decimal grid"],
+                                                marks=pytest.mark.heavy),
+                                   _ON_VERTEX["sliver"], _offset_square()],
                          ids=[*_ON_VERTEX, "offset 1e15"])
 def test_centroids_on_a_vertex_give_a_valid_mesh(loops):
     domain = bm.Domain.from_loops(loops)
@@ -123,6 +125,7 @@ def test_optimize_and_generate_want_their_own_types(thing, square):
         bm.optimize(square.domain)
 
 
+@pytest.mark.heavy
 def test_a_boundary_finer_than_memory_allows_is_refused_up_front():
     t = np.linspace(0.0, 2.0 * np.pi, 100_000, endpoint=False)
     domain = bm.Domain.from_loops([np.column_stack([np.cos(t), np.sin(t)])])

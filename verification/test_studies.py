@@ -328,6 +328,7 @@ def test_a_failing_method_on_the_cluster_is_an_error_row(cases_dir, tmp_path):
 # --------------------------------------------------------------------------- definitions, CLI
 
 
+@pytest.mark.heavy
 def test_a_toml_definition_through_the_command_line(cases_dir, tmp_path, capsys):
     pytest.importorskip("matplotlib")
     from bubblemesh.cli import main

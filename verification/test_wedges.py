@@ -164,6 +164,7 @@ def test_a_flat_triangle_gets_a_frontal_node_without_dividing_by_zero():
 
 
 
+@pytest.mark.heavy
 @pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
 def test_a_sector_with_a_fine_arc_gets_its_count():
     # no cap: the field grows to a quarter of the radius at the tip, far above
