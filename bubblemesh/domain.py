@@ -418,8 +418,8 @@ class Domain:
         ``h(xy) -> (n,)``): the edges are sampled from the size field that
         :func:`bubblemesh.mesh` builds from the corners, the local feature size
         and ``size``, limited to ``gradation`` (so a narrow gap gets short
-        pieces too).  Either way the ring vertices are kept, so corners stay
-        sharp.  ``constraints``
+        pieces too), none longer than the field.  Either way the ring vertices
+        are kept, so corners stay sharp.  ``constraints``
         (LineStrings, LinearRings or a MultiLineString) become interior
         constraints, ``points`` (Points, a MultiPoint or an (m, 2) array) free
         nodes; with either, or several polygon parts, the domain is a planar
@@ -451,7 +451,8 @@ class Domain:
 
 
 def _sampled(domain: Domain, size, gradation: float) -> Domain:
-    """``domain``'s segments split by the size field of ``size`` (bm.mesh's)."""
+    """``domain``'s segments split by the size field of ``size`` (bm.mesh's),
+    rounded up: a user's size is a bound on every piece."""
     from .pipeline import refined_domain
     from .sizing import SizeField
 
@@ -459,7 +460,7 @@ def _sampled(domain: Domain, size, gradation: float) -> Domain:
         field = SizeField.from_domain(domain, size=size, gradation=gradation)
     except (TypeError, ValueError) as error:
         raise type(error)(f"from_shapely: {error}") from None
-    return refined_domain(domain, field)
+    return refined_domain(domain, field, rounding="up")
 
 
 def _polygon_parts(geometry, what: str, strict: bool = True) -> list:

@@ -4,7 +4,8 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
 1. Size: a graded :class:`~bubblemesh.sizing.SizeField` from the input spacing,
    the feature size and the user's ``size`` / ``max_area``; the boundary is
    split to it (:func:`~bubblemesh.refinement.refine_boundary`, input nodes kept
-   bit for bit), which makes the *refined boundary* §2.1 assumes; the walls
+   bit for bit, each segment into the nearest whole number of pieces of
+   length h), which makes the *refined boundary* §2.1 assumes; the walls
    of corners sharper than GRADE_ANGLE get nodes in geometric progression
    from the corner (:mod:`bubblemesh._wedges`), so the wedge fills with a
    zigzag of similar triangles instead of slivers.
@@ -360,11 +361,13 @@ def _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, 
                            "asks for (sizes far finer than the domain)") from None
 
 
-def refined_domain(domain, field):
+def refined_domain(domain, field, rounding="nearest"):
     """``domain`` with its segments split where ``field`` asks for it
     (:func:`bubblemesh.refinement.refine_boundary`: the input nodes first and
-    unmoved, the new ones on their segments), as a Domain."""
-    refined = refine_boundary(domain, field, sharp_angle=GRADE_ANGLE)
+    unmoved, the new ones on their segments; the piece count rounded to the
+    nearest by default, so the walls' first rows are as dense as the field), as
+    a Domain."""
+    refined = refine_boundary(domain, field, sharp_angle=GRADE_ANGLE, rounding=rounding)
     try:
         return refined.to_domain()
     except GeometryError:  # a node an ulp off its segment touches a part a few ulps away

@@ -48,6 +48,7 @@ from bubblemesh.sizing import MAX_SOURCES, SizeField, as_size_function
 __all__ = ["RefinedBoundary", "refine_boundary"]
 
 DYADIC_BITS = (40, 30, 20)  # t rounded to these many bits moves a node <= 2**-21 L
+NEAREST_CAP = 1.3  # rounding="nearest": no piece longer than this many h
 WINDOW = 2  # ulps searched along the dominant axis for a point exactly on the segment
 _EXACT, _NEAR, _DROPPED = 1, 0, -1
 
@@ -153,7 +154,7 @@ def _graph_domain(refined: RefinedBoundary, source: Domain, marks, interior) -> 
 
 def refine_boundary(
     domain_or_loops, h, *, resolution: float = 0.25, max_nodes: int = MAX_SOURCES,
-    sharp_angle: float = 0.0,
+    sharp_angle: float = 0.0, rounding: str = "up",
 ) -> RefinedBoundary:
     """Split the boundary segments to the size ``h`` (a :class:`SizeField`, a
     positive number or a vectorised callable (n, 2) -> (n,)).
@@ -162,8 +163,12 @@ def refine_boundary(
     :meth:`Domain.from_loops` takes them (validated, kept in the given order).
     The walls of corners sharper than ``sharp_angle`` (radians) get nodes in
     geometric progression from the corner (:mod:`bubblemesh._wedges`), the
-    rest of them the nodes above.  Raises ValueError for a bad ``h`` and when
-    more than ``max_nodes`` samples or nodes would be needed."""
+    rest of them the nodes above.  ``rounding="nearest"`` takes n = round(I)
+    pieces instead of ceil(I) (at least ceil(I / NEAREST_CAP)): pieces up to
+    NEAREST_CAP h, but on average as long as h, so the first row of elements
+    along a wall is as dense as the field, not up to twice as dense.  Raises
+    ValueError for a bad ``h`` or ``rounding`` and when more than
+    ``max_nodes`` samples or nodes would be needed."""
     given = isinstance(domain_or_loops, Domain)
     domain = domain_or_loops if given else Domain.from_loops(domain_or_loops)
     rings = _input_rings(domain, given)
@@ -173,6 +178,8 @@ def refine_boundary(
     if isinstance(sharp_angle, bool) or not (
             isinstance(sharp_angle, numbers.Real) and 0 <= sharp_angle <= math.pi):
         raise ValueError(f"sharp_angle must be in [0, pi], got {sharp_angle!r}")
+    if rounding not in ("up", "nearest"):
+        raise ValueError(f"rounding must be 'up' or 'nearest', got {rounding!r}")
     a = np.concatenate(rings)
     b = np.concatenate([np.roll(ring, -1, axis=0) for ring in rings])
     source = domain if given else None
@@ -187,7 +194,8 @@ def refine_boundary(
     graded = wedge_parameters(ca, cb, node_a, node_b, corner_angles(domain), size,
                               float(sharp_angle))
     seg, t, values = _samples(ca, cb, length, size, resolution, max_nodes)
-    t_new, ptr = _split_parameters(seg, t, values, length, len(ca), max_nodes, graded)
+    t_new, ptr = _split_parameters(seg, t, values, length, len(ca), max_nodes, graded,
+                                   rounding == "nearest")
     points, status, offset = _place(ca, cb, t_new, ptr)
     if canon is not None:  # both sides of an interior constraint get the same nodes
         points, status, offset, ptr = _expand(points, status, offset, ptr, canon, flip)
@@ -266,11 +274,12 @@ def _samples(a, b, length, size, resolution, max_nodes):
     return seg[order], t[order], values[order]
 
 
-def _split_parameters(seg, t, values, length, n_seg, max_nodes, graded):
+def _split_parameters(seg, t, values, length, n_seg, max_nodes, graded, nearest=False):
     """Parameters of the new nodes of each segment (flat, with offsets ``ptr``):
     the ``graded`` ones (:func:`~bubblemesh._wedges.wedge_parameters`) and,
     over the interval [lo, hi] of t they leave, n = ceil(I) pieces of equal
-    integral ds / h, I by the trapezoid rule."""
+    integral ds / h, I by the trapezoid rule (``nearest``: n = round(I), at
+    least ceil(I / NEAREST_CAP))."""
     fixed_seg, fixed_t, lo, hi = graded
     same = seg[1:] == seg[:-1]
     trapezoid = np.diff(t) * length[seg[:-1]] * 0.5 * (1 / values[:-1] + 1 / values[1:])
@@ -280,7 +289,11 @@ def _split_parameters(seg, t, values, length, n_seg, max_nodes, graded):
     last = np.searchsorted(seg, np.arange(n_seg), side="right") - 1
     start = _integral_to(lo, seg, t, cumulative, first, last)
     integral = _integral_to(hi, seg, t, cumulative, first, last) - start
-    pieces = np.maximum(1, np.ceil(integral * (1 - 1e-12))).astype(np.int64)
+    if nearest:
+        pieces = np.maximum(np.floor(integral + 0.5), np.ceil(integral / NEAREST_CAP * (1 - 1e-12)))
+    else:
+        pieces = np.ceil(integral * (1 - 1e-12))
+    pieces = np.maximum(1, pieces).astype(np.int64)
     if pieces.sum() + len(fixed_t) > max_nodes:
         raise MeshingError(f"refining the boundary would create more than {max_nodes} nodes: "
                            "the sizes are far finer than the boundary")

@@ -19,7 +19,7 @@ from strategies import budget, domains
 
 import bubblemesh as bm
 from bubblemesh.errors import GeometryError
-from bubblemesh.refinement import refine_boundary
+from bubblemesh.refinement import NEAREST_CAP, refine_boundary
 from bubblemesh.sizing import SizeField
 
 G = 0.25
@@ -44,9 +44,11 @@ def _strictly_between(p, a, b):
     return lo < Fraction(p[axis]) < hi
 
 
-def check_refinement(rings, result, h=None, exact_expected=False):
+def check_refinement(rings, result, h=None, exact_expected=False, rounding="up"):
     """Input nodes kept in order; new nodes on (or, flagged, within
-    max_deviation of) their segment; lengths follow h; the result is valid."""
+    max_deviation of) their segment; lengths follow h (n = ceil(I) pieces, or
+    with ``rounding="nearest"`` round(I) but none over NEAREST_CAP h); the
+    result is valid."""
     assert len(result.loops) == len(rings)
     for ring, loop, index, exact in zip(rings, result.loops, result.input_index,
                                         result.on_segment):  # fmt: skip
@@ -74,27 +76,46 @@ def check_refinement(rings, result, h=None, exact_expected=False):
                 pieces = np.array(chain)
                 mids = 0.5 * (pieces[1:] + pieces[:-1])
                 ratio = np.linalg.norm(np.diff(pieces, axis=0), axis=1) / h(mids)
-                assert ratio.max() <= UPPER, (s, ratio.max())
                 n = len(chain) - 1
                 integral = _integral(a, b, h)
-                assert n - 1 < integral * (1 + QUADRATURE)
-                assert n >= min(1.0, integral) * (1 - QUADRATURE)
+                if rounding == "nearest":
+                    assert ratio.max() <= NEAREST_CAP * UPPER, (s, ratio.max())
+                    # the nearest integer, unless that leaves pieces over the cap
+                    nearest = n - 0.5 <= integral * (1 + QUADRATURE)
+                    capped = n - 1 < integral / NEAREST_CAP * (1 + QUADRATURE)
+                    assert nearest or capped, (s, n, integral)
+                    assert n >= min(1.0, integral / NEAREST_CAP) * (1 - QUADRATURE)
+                    assert n + 0.5 >= integral * (1 - QUADRATURE), (s, n, integral)
+                else:
+                    assert ratio.max() <= UPPER, (s, ratio.max())
+                    assert n - 1 < integral * (1 + QUADRATURE)
+                    assert n >= min(1.0, integral) * (1 - QUADRATURE)
                 if n >= 2:
                     assert ratio.min() >= LOWER, (s, ratio.min())
     bm.Domain.from_loops(result.loops)  # no new crossings
 
 
 @given(domains(max_holes=2, max_corners=6, min_spacing=0.3),
-       st.sampled_from([None, 0.07, "callable"]))  # fmt: skip
-@budget(25)
-def test_refined_random_domains(case, size):
+       st.sampled_from([None, 0.07, "callable"]), st.sampled_from(["up", "nearest"]))  # fmt: skip
+@budget(40)
+def test_refined_random_domains(case, size, rounding):
     if size == "callable":
         size = lambda xy: 0.03 + 0.3 * np.abs(xy[:, 0] - 0.2)  # noqa: E731
     domain = bm.Domain.from_loops(case.loops)
     field = SizeField.from_domain(domain, size=size, gradation=G)
-    result = refine_boundary(case.loops, field)
+    result = refine_boundary(case.loops, field, rounding=rounding)
     rings = [np.asarray(lp, float) for lp in case.loops]
-    check_refinement(rings, result, field)
+    check_refinement(rings, result, field, rounding=rounding)
+
+
+def test_nearest_rounding_on_one_segment():
+    # a constant h on a square of side 10: I = 10 / h on every side
+    square = [np.array([(0, 0), (10, 0), (10, 10), (0, 10)], float)]
+    for h, up, nearest in ((10 / 2.3, 3, 2), (10 / 2.7, 3, 3), (10 / 1.4, 2, 2),
+                           (10 / 1.2, 2, 1), (10 / 3.0, 3, 3)):
+        counts = [len(refine_boundary(square, h, rounding=r).loops[0]) // 4
+                  for r in ("up", "nearest")]
+        assert counts == [up, nearest], (h, counts)
 
 
 @st.composite
@@ -180,6 +201,8 @@ def test_bad_arguments():
         refine_boundary(tri, lambda xy: np.full(len(xy), np.nan))
     with pytest.raises(ValueError, match="resolution"):
         refine_boundary(tri, 0.1, resolution=0.0)
+    with pytest.raises(ValueError, match="rounding"):
+        refine_boundary(tri, 0.1, rounding="down")
     with pytest.raises(bm.MeshingError, match="more than 100"):
         refine_boundary(tri, 1e-3, max_nodes=100)
     with pytest.raises(GeometryError, match="crosses"):

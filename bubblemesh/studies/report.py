@@ -349,17 +349,17 @@ def _quality_vs_gmsh(out: Path):
 
 
 def _unmatched(q):
-    """A sentence naming the cases where Gmsh's count missed bm's by more than
-    3% (no scale of its size reached it), '' when none."""
-    bm_n = q[q.mesher == "bm"].set_index("case")["N"]
-    gmsh_n = q[q.mesher == "gmsh"].set_index("case")["N"]
-    off = [(c, int(gmsh_n[c]), int(bm_n[c])) for c in gmsh_n.index
-           if c in bm_n.index and abs(gmsh_n[c] / bm_n[c] - 1) > 0.03]
+    """A sentence giving the counts where Gmsh's missed bm's by more than
+    MATCHED (no scale of its size reached it), '' when none."""
+    from .quality import MATCHED, unmatched_cases
+
+    n = q.set_index(["case", "mesher"])["N"]
+    off = unmatched_cases(q)
     if not off:
         return ""
-    return (" Gmsh's count could not be brought within 3% of bm's on " + ", ".join(
-        f"{c} ({g} against {b})" for c, g, b in off) + ": its count jumps past that range "
-        "as its size scale changes.")
+    return (f" Gmsh's count could not be brought within {MATCHED:.0%} of bm's on " + ", ".join(
+        f"{c} ({n[c, 'gmsh']} against {n[c, 'bm']})" for c in off) + ": its count jumps "
+        "past that range as its size scale changes.")
 
 
 def _benchmark(out: Path):
