@@ -46,9 +46,10 @@ def clockwise(loop: np.ndarray) -> np.ndarray:
     return loop if signed_area(loop) < 0 else loop[::-1].copy()
 
 
-def circle(center: Sequence[float], radius: float, n: int) -> np.ndarray:
-    """``n`` nodes uniformly spaced on a circle, counter-clockwise from angle 0."""
-    t = 2.0 * np.pi * np.arange(n) / n
+def circle(center: Sequence[float], radius: float, n: int, phase: float = 0.0) -> np.ndarray:
+    """``n`` nodes uniformly spaced on a circle, counter-clockwise from angle
+    ``phase``."""
+    t = phase + 2.0 * np.pi * np.arange(n) / n
     return np.column_stack([center[0] + radius * np.cos(t), center[1] + radius * np.sin(t)])
 
 
@@ -104,17 +105,20 @@ def ellipse_curve(
 
 
 def naca_airfoil(thickness: float, panels: int, chord: float = 1.0,
-                 origin: Sequence[float] = (0.0, 0.0)) -> np.ndarray:
+                 origin: Sequence[float] = (0.0, 0.0), sharp: bool = False) -> np.ndarray:
     """A symmetric NACA 00xx section (``thickness`` as a fraction of the
     chord), clockwise as a hole, with its blunt trailing edge: the standard
     four-digit polynomial, whose last coefficient 0.1015 leaves the edge open
-    by about 2% of the thickness; ``panels`` nodes a side, clustered at both
+    by about 2% of the thickness (``sharp``: the closed-edge coefficient
+    0.1036, the edge one node); ``panels`` nodes a side, clustered at both
     edges by cosine spacing."""
     x = 0.5 * (1.0 - np.cos(np.linspace(0.0, np.pi, panels + 1)))
     y = 5.0 * thickness * (0.2969 * np.sqrt(x) - 0.1260 * x - 0.3516 * x**2
-                           + 0.2843 * x**3 - 0.1015 * x**4)
+                           + 0.2843 * x**3 - (0.1036 if sharp else 0.1015) * x**4)
+    if sharp:
+        y[-1] = 0.0
     upper = np.column_stack([x, y])[::-1]  # trailing edge to leading edge
-    lower = np.column_stack([x, -y])[1:]  # and back: counter-clockwise
+    lower = np.column_stack([x, -y])[1:-1 if sharp else None]  # and back: counter-clockwise
     loop = chord * np.vstack([upper, lower]) + np.asarray(origin, dtype=np.float64)
     return clockwise(loop)
 

@@ -28,8 +28,8 @@ SIZES = (50, 100, 200, 1000)
 
 
 def _regular(n, radius=1.0, center=(0.0, 0.0), phase=0.0):
-    a = phase + 2 * math.pi * np.arange(n) / n
-    return np.column_stack([center[0] + radius * np.cos(a), center[1] + radius * np.sin(a)])
+    """A regular n-gon: n nodes on a circle about the origin by default."""
+    return geometry.circle(center, radius, n, phase)
 
 
 def _hole(loop):
@@ -81,20 +81,8 @@ def shapes():
     yield "plate, three holes", [np.array([(0, 0), (4, 0), (4, 1.5), (0, 1.5)], float)]\
         + [_hole(_regular(32, 0.3, center=(x, 0.75))) for x in (1.0, 2.0, 3.0)]
     yield "sharp airfoil in channel", [np.array([(-2, -1.5), (4, -1.5), (4, 1.5), (-2, 1.5)],
-                                                float), _sharp_airfoil(0.12, 60)]
+                                                float), geometry.naca_airfoil(0.12, 60, sharp=True)]
     yield "gear, corners only", [geometry.gear(12, 1.0, 1.2, 10.0)]
-
-
-def _sharp_airfoil(thickness, panels):
-    """A symmetric NACA 00xx section closed to a sharp trailing edge (the
-    closed-edge coefficient -0.1036), clockwise as a hole."""
-    x = 0.5 * (1.0 - np.cos(np.linspace(0.0, np.pi, panels + 1)))
-    y = 5.0 * thickness * (0.2969 * np.sqrt(x) - 0.1260 * x - 0.3516 * x**2
-                           + 0.2843 * x**3 - 0.1036 * x**4)
-    y[-1] = 0.0
-    upper = np.column_stack([x, y])[::-1]
-    lower = np.column_stack([x, -y])[1:-1]
-    return _hole(np.vstack([upper, lower]))
 
 
 def sweep(sizes=SIZES, out_dir=None, names=None):
