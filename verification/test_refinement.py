@@ -84,7 +84,6 @@ def check_refinement(rings, result, h=None, exact_expected=False, rounding="up")
                     nearest = n - 0.5 <= integral * (1 + QUADRATURE)
                     capped = n - 1 < integral / NEAREST_CAP * (1 + QUADRATURE)
                     assert nearest or capped, (s, n, integral)
-                    assert n >= min(1.0, integral / NEAREST_CAP) * (1 - QUADRATURE)
                     assert n + 0.5 >= integral * (1 - QUADRATURE), (s, n, integral)
                 else:
                     assert ratio.max() <= UPPER, (s, ratio.max())
