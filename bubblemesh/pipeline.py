@@ -35,8 +35,11 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    (:mod:`bubblemesh._patch_repair`: a row one node short, as in a gap
    between a hole and a wall, has no good positions to move to); where the
    count window stops that, a node is in effect moved there from where the
-   mesh is most crowded.  In meshes of at most FINAL_BELOW elements, a last
-   sweep of gradient steps on every free node's star mean (:func:`_polished`).
+   mesh is most crowded.  In meshes of at most FINAL_BELOW elements, once
+   the mesh is chosen (step 4), the free nodes around the worst triangles
+   move together to lift their smallest ratio (:mod:`bubblemesh._minmax`:
+   one node alone is often held there by its neighbours), then a last sweep
+   of gradient steps on every free node's star mean (:func:`_polished`).
    After the flips the mesh is valid and conforming (every segment an edge,
    boundary nodes unmoved) but in general no longer constrained-Delaunay.  Final
    guarantee: the result's smallest radius ratio is never below the §2
@@ -82,6 +85,7 @@ from ._forces import move
 from ._inside import boundary_clearance
 from ._lattice import lattice_points
 from ._mesh import GenerationStats, Mesh, OptimizationStats, _half_mean_edge
+from ._minmax import minmax_patches
 from ._odt import mean_polish, odt_smooth
 from ._patch_repair import RISE, balance_count, repair_worst
 from ._relaxed_flips import relaxed_flips
@@ -130,6 +134,7 @@ BALANCE_BELOW = 20_000  # and only in meshes this small (in larger, 32 nodes are
 BOTH_BELOW, BOTH_COUNT = 5000, 0.03  # both insertions up to this many elements (auto)
 OTHERS = ((True, True), (False, False))  # the other (frontal, seeded) meshes tried then
 FINAL_SWEEPS, FINAL_BELOW = 10, 20_000  # the last mean polish: sweeps, largest mesh
+MINMAX_ROUNDS = 16  # worst patches moved jointly (_minmax)
 FINAL_TRIES = 3  # runs of it, each holding the nodes of the triangles the last put over bounds
 COUNT_TOL = 0.05  # a count this close to the size field's fits it
 MEAN_TIE = 1e-4  # means closer than this are a tie, broken by the minimum
@@ -295,7 +300,7 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
                                progress, clock, options)
             if _better(other, mesh, asked):
                 mesh = other
-    return mesh
+    return _polished(_minmaxed(mesh, max_area), max_area)
 
 
 def _better(a, b, asked):
@@ -856,6 +861,25 @@ def _repaired(mesh, max_area, field):
     stats = replace(mesh.optimization, repairs=operations, repair_nodes=len(X) - n,
                     min_ratio=_smallest_ratio(X, T))
     return replace(mesh, points=X, triangles=T, neighbors=N, radii=radii, optimization=stats)
+
+
+def _minmaxed(mesh, max_area):
+    """Joint min-max moves of the free nodes around the worst triangles
+    (:mod:`bubblemesh._minmax`), MINMAX_ROUNDS patches at most, within the
+    area bounds, in meshes of at most FINAL_BELOW elements (in larger ones a
+    few triangles weigh little and their solves would cost a quarter of the
+    meshing time)."""
+    X, T = np.array(mesh.points), np.asarray(mesh.triangles)
+    if not MINMAX_ROUNDS or len(T) > FINAL_BELOW:
+        return mesh
+    movable = np.arange(len(X)) >= mesh.n_boundary
+    movable[np.unique(np.asarray(mesh.segments))] = False
+    limit = triangle_limits(X, T, mesh.neighbors, getattr(mesh.domain, "regions", None),
+                            max_area) / (1.0 + AREA_MARGIN)
+    if not minmax_patches(X, T, movable, limit, MINMAX_ROUNDS):
+        return mesh
+    stats = replace(mesh.optimization, min_ratio=_smallest_ratio(X, T))
+    return replace(mesh, points=X, optimization=stats)
 
 
 def _polished(mesh, max_area):
