@@ -6,7 +6,8 @@ must first be split.  :func:`refine_boundary` splits every input segment
 whose length the size field h does not allow:
 
 * the number of pieces is n = ceil(integral of ds / h) along the segment (the
-  trapezoid rule on adaptive samples spaced <= ``resolution`` times h), and the
+  trapezoid rule on adaptive samples spaced <= ``resolution`` times h: at an
+  eighth, its error at the kinks of a cone field stays far below 1%), and the
   new nodes sit at equal h-weighted arc length, so each piece has
   integral ds / h = I / n <= 1: its length is at most h(midpoint) / (1 - g / 2)
   for a field of gradation g, and at least about half of it when n >= 2;
@@ -153,7 +154,7 @@ def _graph_domain(refined: RefinedBoundary, source: Domain, marks, interior) -> 
 
 
 def refine_boundary(
-    domain_or_loops, h, *, resolution: float = 0.25, max_nodes: int = MAX_SOURCES,
+    domain_or_loops, h, *, resolution: float = 0.125, max_nodes: int = MAX_SOURCES,
     sharp_angle: float = 0.0, rounding: str = "up",
 ) -> RefinedBoundary:
     """Split the boundary segments to the size ``h`` (a :class:`SizeField`, a
