@@ -145,6 +145,7 @@ ITERATIONS = {"centroid": 200, "frontal": 30}  # §3 force iterations by default
 ROUNDS = {"centroid": 3, "frontal": 1}  # smoothing rounds by default (the front starts regular)
 RADII_REFRESH = 10  # §3's radii follow the size field at the nodes' positions this often
 ALIGN_PIECES, ALIGN_SLACK = 4, 0.02  # the lattice along a wall cut this finely (_wall_frame)
+ALIGN_OVER = 0.02  # pieces up to this much over the cap still set the lattice (_wall_frame)
 LATTICE_MARGIN = 4.0  # the lattice keeps this many sizes off every boundary node
 
 
@@ -306,10 +307,14 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
 def _better(a, b, asked):
     """Is mesh a better than b: fewer triangles below a radius ratio (eq. 10)
     of 0.7; or as many, and a's count within COUNT_TOL of ``asked`` (the
-    field's) where b's is not; or both or neither within it, a count within
-    BOTH_COUNT of b's (quality is not bought with elements) and a mean ratio
-    higher by more than MEAN_TIE with a minimum at least b's (or at least
-    MIN_ENOUGH), or a mean within MEAN_TIE of b's and a higher minimum?"""
+    field's) where b's is not; or both or neither within it, a's count within
+    BOTH_COUNT of b's (quality is not bought with elements; below it too
+    where both are within COUNT_TOL) and a mean ratio higher by more than
+    MEAN_TIE with a minimum at least b's (or at least MIN_ENOUGH), or a mean
+    within MEAN_TIE of b's and a higher minimum?  (A perfect lattice whose
+    walls are cut a little longer than the field's size has a few percent
+    fewer elements than a centroid mesh, both within COUNT_TOL of the
+    field's.)"""
     qa, qb = a.quality(), b.quality()
     poor_a, poor_b = int((qa < 0.7).sum()), int((qb < 0.7).sum())
     if poor_a != poor_b:
@@ -317,7 +322,8 @@ def _better(a, b, asked):
     fits_a, fits_b = (abs(len(q) / asked - 1.0) <= COUNT_TOL for q in (qa, qb))
     if fits_a != fits_b:
         return fits_a
-    if abs(len(qa) / len(qb) - 1.0) > BOTH_COUNT:
+    fewer = fits_a and fits_b and len(qa) < len(qb)  # fewer elements buy no quality
+    if not fewer and abs(len(qa) / len(qb) - 1.0) > BOTH_COUNT:
         return False
     if abs(qa.mean() - qb.mean()) <= MEAN_TIE:
         return bool(qa.min() > qb.min())
@@ -443,9 +449,10 @@ def _wall_frame(source, fine, cap):
     """(origin, direction, spacing) of a lattice through the first node of
     the longest input segment, along it, as fine as its refined pieces: when
     it is cut into at least ALIGN_PIECES of them and they are at most
-    ALIGN_SLACK shorter than the cap.  Then a domain whose walls lie on one
-    lattice (a regular hexagon, an equilateral triangle) is filled by it
-    seamlessly; else None (the lattice along x)."""
+    ALIGN_SLACK shorter or ALIGN_OVER longer than the cap (the nearest piece
+    count makes them up to 1.3 times the cap).  Then a domain whose walls lie
+    on one lattice (a regular hexagon, an equilateral triangle) is filled by
+    it seamlessly; else None (the lattice along x)."""
     P, S = np.asarray(source.points), np.asarray(source.segments)
     d = P[S[:, 1]] - P[S[:, 0]]
     lengths = np.hypot(d[:, 0], d[:, 1])
@@ -457,7 +464,7 @@ def _wall_frame(source, fine, cap):
     inner = (off <= 1e-9 * length) & (along > 1e-9 * length) & (along < (1 - 1e-9) * length)
     pieces = int(inner.sum()) + 1
     step = length / pieces
-    if pieces < ALIGN_PIECES or not (1 - ALIGN_SLACK) * cap <= step <= cap * (1 + 1e-12):
+    if pieces < ALIGN_PIECES or not (1 - ALIGN_SLACK) * cap <= step <= cap * (1 + ALIGN_OVER):
         return None
     return a, u, step
 
