@@ -156,9 +156,13 @@ def _solve(patch, start, cap):
     bounds = [(None, None)] * (len(z0) - 1) + [(None, cap)]
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore", RuntimeWarning)
-        z = minimize(objective, z0, jac=gradient, method="SLSQP", bounds=bounds,
-                     constraints=[dict(type="ineq", fun=constraint, jac=constraint_jacobian)],
-                     options=dict(maxiter=ITERATIONS, ftol=FTOL)).x
+        try:
+            z = minimize(objective, z0, jac=gradient, method="SLSQP", bounds=bounds,
+                         constraints=[dict(type="ineq", fun=constraint,
+                                           jac=constraint_jacobian)],
+                         options=dict(maxiter=ITERATIONS, ftol=FTOL)).x
+        except (ValueError, np.linalg.LinAlgError):  # the move is refused, never the mesh
+            z = np.full_like(z0, np.nan)
     return patch.coordinates(z)
 
 

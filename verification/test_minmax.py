@@ -112,3 +112,18 @@ def test_a_jittered_lattice_is_given_back(seed):
     assert _run(X, tri, segments, n_b, np.full(len(tri), np.inf), rounds=64) > 0
     assert O.radius_ratio_reference(X, tri).min() >= 1 - 1e-5
     np.testing.assert_allclose(X, lattice, atol=1e-2)  # rho is flat to second order there
+
+
+def test_a_failing_solver_leaves_the_mesh_as_it_was(monkeypatch):
+    """scipy raising inside a solve refuses that move, never the mesh."""
+    from bubblemesh import _minmax
+
+    def broken(*args, **kwargs):
+        raise ValueError("solver failure")
+
+    monkeypatch.setattr(_minmax, "minimize", broken)
+    X, tri, segments, n_b = _lattice_patch(3)
+    X[n_b:] += np.random.default_rng(0).uniform(-0.15, 0.15, X[n_b:].shape)
+    X0 = X.copy()
+    assert _run(X, tri, segments, n_b, np.full(len(tri), np.inf)) == 0
+    np.testing.assert_array_equal(X, X0)
