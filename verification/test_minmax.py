@@ -6,7 +6,7 @@ triangle counter-clockwise and the mesh conforming, the minimum never
 lowered nor any triangle taken below min(its ratio, KEEP), the mean within
 the MEAN_DROP budget, the area bounds kept, the same bits on a second run; a
 jittered equilateral lattice, whose optimum is known (every ratio 1), given
-back.
+back; a solver that raises leaves the mesh as it was.
 
 Oracles: verification/oracles.py (exact orientation and conformity, the
 radius ratio from the inradius and circumradius formulas), numpy areas."""
