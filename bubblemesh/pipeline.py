@@ -876,9 +876,9 @@ def _minmaxed(mesh, max_area):
     area bounds, in meshes of at most FINAL_BELOW elements (in larger ones a
     few triangles weigh little and their solves would cost a quarter of the
     meshing time)."""
-    X, T = np.array(mesh.points), np.asarray(mesh.triangles)
-    if not MINMAX_ROUNDS or len(T) > FINAL_BELOW:
+    if not MINMAX_ROUNDS or len(mesh.triangles) > FINAL_BELOW:
         return mesh
+    X, T = np.array(mesh.points), np.asarray(mesh.triangles)
     movable = np.arange(len(X)) >= mesh.n_boundary
     movable[np.unique(np.asarray(mesh.segments))] = False
     limit = triangle_limits(X, T, mesh.neighbors, getattr(mesh.domain, "regions", None),
