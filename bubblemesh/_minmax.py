@@ -22,7 +22,9 @@ more than RISE and the mesh's mean ratio stays within MEAN_DROP of its value
 before the first move.  The rounds stop at the first patch that cannot be
 lifted (the mesh's minimum cannot rise past it) or after ``rounds``.  Nodes
 keep their triangles, so the mesh stays valid and conforming and boundary
-nodes never move; SLSQP and the order of the patches are deterministic.
+nodes never move; SLSQP and the order of the patches are deterministic.  A
+solve that fails (a zero-area or zero-length trial point divides by zero in
+:func:`ratio_rows`; scipy raising) refuses its move.
 """
 
 import math
@@ -161,7 +163,7 @@ def _solve(patch, start, cap):
                          constraints=[dict(type="ineq", fun=constraint,
                                            jac=constraint_jacobian)],
                          options=dict(maxiter=ITERATIONS, ftol=FTOL)).x
-        except (ValueError, np.linalg.LinAlgError):  # the move is refused, never the mesh
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError):  # refuse the move only
             z = np.full_like(z0, np.nan)
     return patch.coordinates(z)
 

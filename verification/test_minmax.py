@@ -114,12 +114,14 @@ def test_a_jittered_lattice_is_given_back(seed):
     np.testing.assert_allclose(X, lattice, atol=1e-2)  # rho is flat to second order there
 
 
-def test_a_failing_solver_leaves_the_mesh_as_it_was(monkeypatch):
-    """scipy raising inside a solve refuses that move, never the mesh."""
+@pytest.mark.parametrize("error", [ValueError, ZeroDivisionError])
+def test_a_failing_solver_leaves_the_mesh_as_it_was(monkeypatch, error):
+    """scipy raising inside a solve, or the ratio kernel dividing by zero at a
+    flat trial point, refuses that move, never the mesh."""
     from bubblemesh import _minmax
 
     def broken(*args, **kwargs):
-        raise ValueError("solver failure")
+        raise error("solver failure")
 
     monkeypatch.setattr(_minmax, "minimize", broken)
     X, tri, segments, n_b = _lattice_patch(3)
