@@ -45,7 +45,7 @@ def lattice_points(points: np.ndarray, segments: np.ndarray, h: float, margin: f
     else:
         origin, u, step = frame
         axes = np.array([[u[0], -u[1]], [u[1], u[0]]])  # columns: u and u turned left
-        Q, anchor = (P - origin) @ axes, np.zeros(2)  # the frame's coordinates
+        Q, anchor = _times(P - origin, axes), np.zeros(2)  # the frame's coordinates
     lo, hi = Q.min(axis=0), Q.max(axis=0)
     dy = 0.5 * math.sqrt(3.0) * step
     rows = np.arange(math.ceil((lo[1] - anchor[1]) / dy), math.floor((hi[1] - anchor[1]) / dy) + 1)
@@ -63,7 +63,7 @@ def lattice_points(points: np.ndarray, segments: np.ndarray, h: float, margin: f
             if i1 >= i0:
                 x = first + step * np.arange(i0, i1 + 1)
                 row = np.column_stack([x, np.full(len(x), y)])
-                found.append(row if axes is None else origin + row @ axes.T)
+                found.append(row if axes is None else origin + _times(row, axes.T))
     if not found:
         return np.zeros((0, 2))
     L = np.concatenate(found)
@@ -77,6 +77,13 @@ def lattice_points(points: np.ndarray, segments: np.ndarray, h: float, margin: f
     if len(L):
         L = L[np.asarray(size(L)) >= h * (1.0 - 1e-12)]
     return np.ascontiguousarray(L)
+
+
+def _times(V: np.ndarray, M: np.ndarray) -> np.ndarray:
+    """V (k, 2) times the 2 x 2 matrix M, written out: numpy's ``@`` goes to
+    BLAS, whose bits change with its thread count."""
+    return np.column_stack([V[:, 0] * M[0, 0] + V[:, 1] * M[1, 0],
+                            V[:, 0] * M[0, 1] + V[:, 1] * M[1, 1]])
 
 
 def _offsets(n: int) -> np.ndarray:

@@ -22,7 +22,9 @@ more than RISE and the mesh's mean ratio stays within MEAN_DROP of its value
 before the first move.  The rounds stop at the first patch that cannot be
 lifted (the mesh's minimum cannot rise past it) or after ``rounds``.  Nodes
 keep their triangles, so the mesh stays valid and conforming and boundary
-nodes never move; SLSQP and the order of the patches are deterministic.  A
+nodes never move; SLSQP (run on one BLAS thread: its LAPACK calls give
+other bits on other thread counts) and the order of the patches are
+deterministic.  A
 solve that fails (a zero-area or zero-length trial point divides by zero in
 :func:`ratio_rows`; scipy raising) refuses its move.
 """
@@ -33,6 +35,7 @@ import warnings
 import numpy as np
 from numba import njit
 from scipy.optimize import minimize
+from threadpoolctl import threadpool_limits
 
 from ._area_bound import _areas
 from ._flips import turned_over
@@ -190,10 +193,11 @@ def minmax_patches(X, T, movable, limit, rounds):
     ptr, idx = stars(T, len(X))
     q = triangle_quality(X, T)
     lowest = (float(q.mean()) - MEAN_DROP) * len(T)  # the least sum of ratios
-    for kept in range(rounds):
-        free, tris = _around(T, ptr, idx, int(np.argmin(q)), movable)
-        if not len(free) or not _moved(X, T, q, free, tris, limit, lowest):
-            return kept
+    with threadpool_limits(limits=1, user_api="blas"):
+        for kept in range(rounds):
+            free, tris = _around(T, ptr, idx, int(np.argmin(q)), movable)
+            if not len(free) or not _moved(X, T, q, free, tris, limit, lowest):
+                return kept
     return rounds
 
 

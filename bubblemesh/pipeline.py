@@ -460,7 +460,8 @@ def _wall_frame(source, fine, cap):
     a, length = P[S[k, 0]], float(lengths[k])
     u = d[k] / length
     rel = np.asarray(fine.points) - a
-    along, off = rel @ u, np.abs(rel @ np.array([-u[1], u[0]]))
+    along = rel[:, 0] * u[0] + rel[:, 1] * u[1]  # not `@`: BLAS's bits vary with its threads
+    off = np.abs(rel[:, 1] * u[0] - rel[:, 0] * u[1])
     inner = (off <= 1e-9 * length) & (along > 1e-9 * length) & (along < (1 - 1e-9) * length)
     pieces = int(inner.sum()) + 1
     step = length / pieces
