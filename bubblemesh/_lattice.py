@@ -10,12 +10,15 @@ cap; the frontal insertion of §2 then fills only the band between the walls
 and the lattice, whose triangles it accepts as they are.  The lattice may
 be laid in a frame, through a boundary node along a wall and as fine as that
 wall's pieces: walls that lie on one lattice (a regular hexagon) then meet it
-without a seam.
+without a seam.  A wall made of the lattice's own edges is its first row, so
+the lattice may come up to it (``on_lattice_margin``, half a size in
+``bubblemesh.mesh``) instead of leaving the margin's band to the front.
 
 Inside or outside is decided per lattice row by the parity of the boundary
 segments the row's line crosses (half-open in y, so a line through a node
 counts it once); a kept node lies at least (margin - 1/2) h from every
-segment, far beyond any rounding, so the float test decides exactly.
+segment, or a row's height from a lattice-edge wall, far beyond any
+rounding, so the float test decides exactly.
 """
 
 from __future__ import annotations
@@ -31,13 +34,16 @@ JITTER = 1e-9
 
 
 def lattice_points(points: np.ndarray, segments: np.ndarray, h: float, margin: float,
-                   size, frame=None) -> np.ndarray:
+                   size, frame=None, on_lattice_margin=None) -> np.ndarray:
     """The triangular lattice of spacing ``h`` (rows along x, anchored at the
     lower left of the boundary's bounding box) inside the domain bounded by
     ``segments`` over ``points``, at least ``margin`` h from every boundary
     node, where ``size`` (a callable h(xy)) is h: (K, 2), row by row.
     ``frame`` (origin, unit direction, spacing): the lattice of that spacing
-    through the origin, its rows along the direction, instead."""
+    through the origin, its rows along the direction, instead.  With
+    ``on_lattice_margin``, a boundary node all of whose segments are edges
+    of the lattice (:func:`_on_lattice_nodes`) keeps only that many h off
+    instead: such a wall is the lattice's own first row."""
     P = np.asarray(points, dtype=np.float64)
     S = np.asarray(segments, dtype=np.int64)
     if frame is None:
@@ -71,12 +77,41 @@ def lattice_points(points: np.ndarray, segments: np.ndarray, h: float, margin: f
     # orientation and in-circle test of the triangulation falls back to exact
     # arithmetic (3-4x slower): a fixed offset of 1e-9 h per node breaks the ties
     L += h * JITTER * _offsets(len(L))
+    walls = np.zeros(len(P), bool)
+    if on_lattice_margin is not None:
+        walls = _on_lattice_nodes(Q, S, anchor, step)
+        near = on_lattice_margin * h
+        if walls.any():
+            L = L[cKDTree(P[walls]).query(L, k=1, distance_upper_bound=near)[0] >= near]
     # bounded: a node far from every boundary node (the bulk) answers at once
-    clear = cKDTree(P).query(L, k=1, distance_upper_bound=margin * h)[0] >= margin * h
-    L = L[clear]
+    if not walls.all():
+        far = cKDTree(P[~walls]).query(L, k=1, distance_upper_bound=margin * h)[0]
+        L = L[far >= margin * h]
     if len(L):
         L = L[np.asarray(size(L)) >= h * (1.0 - 1e-12)]
     return np.ascontiguousarray(L)
+
+
+def _on_lattice_nodes(Q: np.ndarray, S: np.ndarray, anchor: np.ndarray,
+                      step: float) -> np.ndarray:
+    """Which boundary nodes (frame coordinates Q) have only lattice edges as
+    segments: both ends on a lattice node and one step apart, to 1e-6 of a
+    step.  A lattice node then lies at least a row's height from each such
+    segment, or on its end."""
+    dy = 0.5 * math.sqrt(3.0) * step
+    j = np.round((Q[:, 1] - anchor[1]) / dy)
+    first = anchor[0] + 0.5 * step * (j % 2)
+    i = np.round((Q[:, 0] - first) / step)
+    tol = 1e-6 * step
+    on = ((np.abs(Q[:, 1] - anchor[1] - j * dy) <= tol)
+          & (np.abs(Q[:, 0] - first - i * step) <= tol))
+    d = Q[S[:, 1]] - Q[S[:, 0]]
+    edge = on[S[:, 0]] & on[S[:, 1]] & (np.abs(np.hypot(d[:, 0], d[:, 1]) - step) <= tol)
+    bad = np.zeros(len(Q), bool)
+    bad[S[~edge].ravel()] = True
+    walls = np.zeros(len(Q), bool)
+    walls[S.ravel()] = True
+    return walls & ~bad
 
 
 def _times(V: np.ndarray, M: np.ndarray) -> np.ndarray:

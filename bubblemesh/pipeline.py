@@ -147,6 +147,7 @@ RADII_REFRESH = 10  # §3's radii follow the size field at the nodes' positions 
 ALIGN_PIECES, ALIGN_SLACK = 4, 0.02  # the lattice along a wall cut this finely (_wall_frame)
 ALIGN_OVER = 0.02  # pieces up to this much over the cap still set the lattice (_wall_frame)
 LATTICE_MARGIN = 4.0  # the lattice keeps this many sizes off every boundary node
+WALL_LATTICE_MARGIN = 0.5  # but only this far off walls made of its own edges
 
 
 class QualityWarning(UserWarning):
@@ -442,7 +443,7 @@ def _lattice(domain, field, source):
                          "about", f"the cap {cap:.3g} is far finer than the domain; pass a "
                          "larger size")
     return lattice_points(domain.points, domain.segments, cap, LATTICE_MARGIN, field,
-                          _wall_frame(source, domain, cap))
+                          _wall_frame(source, domain, cap), WALL_LATTICE_MARGIN)
 
 
 def _wall_frame(source, fine, cap):

@@ -295,7 +295,9 @@ def test_frontal_mesh_is_valid_conforming_and_never_worse_than_its_generation(lo
     have = {p.tobytes() for p in np.asarray(m.points[: m.n_boundary])}
     assert all(p.tobytes() in have for p in np.asarray(domain.points))
     q = bm.radius_ratio(m.points, m.triangles)
-    assert q.min() >= m.optimization.min_ratio_generation
+    # the record is the compiled kernel's ratio: on a perfect lattice it and
+    # bm.radius_ratio's formula differ in the last bits
+    assert q.min() >= m.optimization.min_ratio_generation - 1e-14
     # the front's first row is held like seeds and counted as such
     assert m.generation.seeds > 0
 

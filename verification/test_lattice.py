@@ -5,7 +5,11 @@ verification/oracles.py (strictly inside the domain), brute-force distances
 (at least margin h from every boundary node) and the size field (at its
 cap); the returned nodes must be exactly those, each within its 1e-9 h
 offset.  In a frame (origin, direction, spacing), the same filters on the
-lattice through the origin along that direction."""
+lattice through the origin along that direction.  With ``on_lattice_margin``
+a boundary node whose segments are all lattice edges (both ends within 1e-6
+of a step of the oracle's lattice nodes, one step apart) needs only that
+margin; on a triangle and a hexagon whose walls are lattice edges the
+lattice then holds every node strictly inside (counted by formula)."""
 
 from __future__ import annotations
 
@@ -23,7 +27,7 @@ from bubblemesh.refinement import refine_boundary
 from bubblemesh.sizing import SizeField
 
 
-def _expected(P, loops, h, margin, field, frame=None):
+def _expected(P, loops, h, margin, field, frame=None, segments=None, wall_margin=None):
     if frame is None:
         lo, hi = P.min(axis=0), P.max(axis=0)
         dy = math.sqrt(3) / 2 * h
@@ -40,9 +44,21 @@ def _expected(P, loops, h, margin, field, frame=None):
         nodes = o + i.ravel()[:, None] * a + j.ravel()[:, None] * b
         nodes = nodes[np.all((nodes >= P.min(axis=0) - step) & (nodes <= P.max(axis=0) + step),
                              axis=1)]
-    d = np.sqrt(((nodes[:, None, :] - P[None, :, :]) ** 2).sum(-1)).min(axis=1)
-    sure = np.abs(d - margin * h) > 1e-6 * h  # skip nodes on the margin's edge
-    keep = [k for k in np.flatnonzero(sure & (d >= margin * h))
+    D = np.sqrt(((nodes[:, None, :] - P[None, :, :]) ** 2).sum(-1))
+    need = np.full(len(P), margin * h)
+    if wall_margin is not None:
+        step = h if frame is None else frame[2]
+        on = D.min(axis=0) <= 1e-6 * step
+        S = np.asarray(segments)
+        length = np.hypot(*(P[S[:, 1]] - P[S[:, 0]]).T)
+        edge = on[S[:, 0]] & on[S[:, 1]] & (np.abs(length - step) <= 1e-6 * step)
+        exempt = np.zeros(len(P), bool)
+        exempt[S.ravel()] = True
+        exempt[S[~edge].ravel()] = False
+        need[exempt] = wall_margin * h
+    gap = D - need[None, :]
+    sure = np.abs(gap).min(axis=1) > 1e-6 * h  # skip nodes on a margin's edge
+    keep = [k for k in np.flatnonzero(sure & (gap.min(axis=1) >= 0))
             if O.domain_location(P, loops, tuple(nodes[k])) > 0]
     keep = [k for k in keep if field(nodes[k:k + 1])[0] >= h * (1 - 1e-12)]
     return nodes[keep], nodes[~sure]
@@ -81,6 +97,59 @@ def test_a_lattice_in_a_frame_is_that_lattice_filtered(loops, h, angle, node, sh
         assert len(every) and np.hypot(*(every - x).T).min() <= 2 * JITTER * h * math.sqrt(2), x
     for y in want:
         assert len(got) and np.hypot(*(got - y).T).min() <= 2 * JITTER * h * math.sqrt(2), y
+
+
+@given(corner_domains(max_holes=1), st.sampled_from([0.3, 0.15]), st.integers(0, 40),
+       st.floats(1.0, 3.0))
+def test_walls_made_of_lattice_edges_need_only_their_own_margin(loops, h, segment, margin):
+    """A frame along one refined segment, as fine as it: that wall (and any
+    other that happens to lie on the lattice) is made of lattice edges, and
+    the lattice keeps only 0.5 h off its nodes, margin h off the others."""
+    domain = bm.Domain.from_loops(loops)
+    field = SizeField.from_domain(domain, size=h)
+    fine = refine_boundary(domain, field).to_domain()
+    P, S = np.asarray(fine.points), np.asarray(fine.segments)
+    a, b = P[S[segment % len(S)]]
+    step = float(np.hypot(*(b - a)))
+    frame = (a, (b - a) / step, step)
+    got = lattice_points(P, S, h, margin, field, frame, 0.5)
+    want, unsure = _expected(P, fine.loops, h, margin, field, frame, S, 0.5)
+    every = np.concatenate([want, unsure])
+    for x in got:
+        assert len(every) and np.hypot(*(every - x).T).min() <= 2 * JITTER * h * math.sqrt(2), x
+    for y in want:
+        assert len(got) and np.hypot(*(got - y).T).min() <= 2 * JITTER * h * math.sqrt(2), y
+
+
+def _polygon_walls(corners, n):
+    """The polygon's walls, each cut into n equal pieces: points, segments."""
+    P = np.array([c + (d - c) * k / n for c, d in zip(corners, np.roll(corners, -1, axis=0))
+                  for k in range(n)])
+    return P, np.column_stack([np.arange(len(P)), (np.arange(len(P)) + 1) % len(P)])
+
+
+def test_a_lattice_reaches_walls_made_of_its_edges():
+    """An equilateral triangle of side n and a regular hexagon of side n
+    (in steps), walls cut into steps, the frame along the first wall: the
+    (n - 1)(n - 2) / 2 and 3 n^2 - 3 n + 1 lattice nodes strictly inside
+    are all kept at any margin; walls cut in double steps are not lattice
+    edges, and their margin holds."""
+    h, n = 0.1, 12
+    for corners, inside in (
+            (n * h * np.array([(0, 0), (1, 0), (0.5, math.sqrt(3) / 2)]), (n - 1) * (n - 2) // 2),
+            (n * h * np.array([(math.cos(k * math.pi / 3), math.sin(k * math.pi / 3))
+                               for k in range(6)]), 3 * n * n - 3 * n + 1)):
+        P, S = _polygon_walls(corners, n)
+        field = SizeField(P, np.full(len(P), h), cap=h)
+        u = (P[1] - P[0]) / h
+        got = lattice_points(P, S, h, 3.0, field, (P[0], u, h), 0.5)
+        assert len(got) == inside
+        D = np.hypot(*(got[:, None, :] - P[None, :, :]).transpose(2, 0, 1))
+        assert D.min() > 0.5 * h
+        assert len(lattice_points(P, S, h, 3.0, field, (P[0], u, h))) < inside
+        Q, R = _polygon_walls(corners, n // 2)  # pieces of 2 h: no lattice edges
+        coarse = lattice_points(Q, R, h, 3.0, field, (Q[0], u, h), 0.5)
+        assert np.hypot(*(coarse[:, None, :] - Q[None, :, :]).transpose(2, 0, 1)).min() >= 3 * h
 
 
 def test_no_lattice_where_the_field_is_below_its_cap():
