@@ -138,6 +138,7 @@ MINMAX_ROUNDS = 16  # worst patches moved jointly (_minmax)
 FINAL_TRIES = 3  # runs of it, each holding the nodes of the triangles the last put over bounds
 COUNT_TOL = 0.05  # a count this close to the size field's fits it
 MEAN_TIE = 1e-4  # means closer than this are a tie, broken by the minimum
+MIN_TIE = 1e-6  # minima closer than this are a tie (both at a sharp corner's bound)
 MIN_ENOUGH = 0.9  # a mesh whose minimum stays above this is ranked by its mean
 UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
 FRONTAL_ELEMENTS = 1000  # frontal insertion from this many elements of the cap size up
@@ -145,7 +146,7 @@ ITERATIONS = {"centroid": 200, "frontal": 30}  # §3 force iterations by default
 ROUNDS = {"centroid": 3, "frontal": 1}  # smoothing rounds by default (the front starts regular)
 RADII_REFRESH = 10  # §3's radii follow the size field at the nodes' positions this often
 ALIGN_PIECES, ALIGN_SLACK = 4, 0.02  # the lattice along a wall cut this finely (_wall_frame)
-ALIGN_OVER = 0.02  # pieces up to this much over the cap still set the lattice (_wall_frame)
+ALIGN_OVER = 0.03  # pieces up to this much over the cap still set the lattice (_wall_frame)
 LATTICE_MARGIN = 4.0  # the lattice keeps this many sizes off every boundary node
 WALL_LATTICE_MARGIN = 0.5  # but only this far off walls made of its own edges
 
@@ -311,7 +312,7 @@ def _better(a, b, asked):
     field's) where b's is not; or both or neither within it, a's count within
     BOTH_COUNT of b's (quality is not bought with elements; below it too
     where both are within COUNT_TOL) and a mean ratio higher by more than
-    MEAN_TIE with a minimum at least b's (or at least MIN_ENOUGH), or a mean
+    MEAN_TIE with a minimum at least b's (or at least MIN_ENOUGH; to MIN_TIE), or a mean
     within MEAN_TIE of b's and a higher minimum?  (A perfect lattice whose
     walls are cut a little longer than the field's size has a few percent
     fewer elements than a centroid mesh, both within COUNT_TOL of the
@@ -328,7 +329,7 @@ def _better(a, b, asked):
         return False
     if abs(qa.mean() - qb.mean()) <= MEAN_TIE:
         return bool(qa.min() > qb.min())
-    return bool(qa.mean() > qb.mean() and qa.min() >= min(qb.min(), MIN_ENOUGH))
+    return bool(qa.mean() > qb.mean() and qa.min() >= min(qb.min(), MIN_ENOUGH) - MIN_TIE)
 
 
 def _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, clock,
@@ -448,27 +449,33 @@ def _lattice(domain, field, source):
 
 def _wall_frame(source, fine, cap):
     """(origin, direction, spacing) of a lattice through the first node of
-    the longest input segment, along it, as fine as its refined pieces: when
-    it is cut into at least ALIGN_PIECES of them and they are at most
-    ALIGN_SLACK shorter or ALIGN_OVER longer than the cap (the nearest piece
-    count makes them up to 1.3 times the cap).  Then a domain whose walls lie
-    on one lattice (a regular hexagon, an equilateral triangle) is filled by
-    it seamlessly; else None (the lattice along x)."""
+    an input segment, along it, as fine as its refined pieces: the longest
+    segment cut into at least ALIGN_PIECES equal pieces (to 1e-6 of a piece;
+    a wall graded toward a sharp corner is not) at most ALIGN_SLACK shorter
+    or ALIGN_OVER longer than the cap (the nearest piece count makes them up
+    to 1.3 times the cap).  Then a domain whose walls lie on one lattice (a
+    regular hexagon, an equilateral triangle) is filled by it seamlessly;
+    else None (the lattice along x)."""
     P, S = np.asarray(source.points), np.asarray(source.segments)
     d = P[S[:, 1]] - P[S[:, 0]]
     lengths = np.hypot(d[:, 0], d[:, 1])
-    k = int(np.argmax(lengths))  # the first of the longest
-    a, length = P[S[k, 0]], float(lengths[k])
-    u = d[k] / length
-    rel = np.asarray(fine.points) - a
-    along = rel[:, 0] * u[0] + rel[:, 1] * u[1]  # not `@`: BLAS's bits vary with its threads
-    off = np.abs(rel[:, 1] * u[0] - rel[:, 0] * u[1])
-    inner = (off <= 1e-9 * length) & (along > 1e-9 * length) & (along < (1 - 1e-9) * length)
-    pieces = int(inner.sum()) + 1
-    step = length / pieces
-    if pieces < ALIGN_PIECES or not (1 - ALIGN_SLACK) * cap <= step <= cap * (1 + ALIGN_OVER):
-        return None
-    return a, u, step
+    F = np.asarray(fine.points)
+    for k in np.argsort(-lengths, kind="stable"):  # the first of the longest first
+        a, length = P[S[k, 0]], float(lengths[k])
+        if length < ALIGN_PIECES * (1 - ALIGN_SLACK) * cap:
+            return None
+        u = d[k] / length
+        rel = F - a
+        along = rel[:, 0] * u[0] + rel[:, 1] * u[1]  # not `@`: BLAS's bits vary with its threads
+        off = np.abs(rel[:, 1] * u[0] - rel[:, 0] * u[1])
+        inner = (off <= 1e-9 * length) & (along > 1e-9 * length) & (along < (1 - 1e-9) * length)
+        pieces = int(inner.sum()) + 1
+        step = length / pieces
+        equal = np.abs(np.sort(along[inner]) / step - np.arange(1, pieces)).max(initial=0.0)
+        if (pieces >= ALIGN_PIECES and equal <= 1e-6
+                and (1 - ALIGN_SLACK) * cap <= step <= cap * (1 + ALIGN_OVER)):
+            return a, u, step
+    return None
 
 
 def _frontal_seeds(domain):

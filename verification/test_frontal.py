@@ -36,7 +36,16 @@ import bubblemesh as bm
 from bubblemesh._frontal import ACCEPT, CROWD, WALL_ACCEPT, frontal_point, walk_to
 from bubblemesh._lattice import lattice_points
 from bubblemesh.generation import generate_sized
-from bubblemesh.pipeline import FRONTAL_ELEMENTS, _frontal_wanted, _user_size
+from bubblemesh.pipeline import (
+    ALIGN_OVER,
+    ALIGN_PIECES,
+    ALIGN_SLACK,
+    FRONTAL_ELEMENTS,
+    _frontal_wanted,
+    _user_size,
+    _wall_frame,
+    refined_domain,
+)
 from bubblemesh.refinement import refine_boundary
 from bubblemesh.sizing import SizeField
 
@@ -140,6 +149,47 @@ def test_a_domain_on_one_lattice_gets_that_lattice(sides, per):
     q = O.radius_ratio_reference(np.asarray(m.points), np.asarray(m.triangles))
     assert q.min() >= 0.99 and q.mean() >= 0.999
     O.check_conforming(m.points, m.triangles, m.segments, area=domain.area, rel=1e-9)
+
+
+@given(corner_domains(max_holes=2), st.sampled_from([0.3, 0.12, 0.05]))
+def test_the_lattice_frame_lies_on_a_wall_cut_in_equal_pieces(loops, size):
+    """A frame (origin, u, step) from _wall_frame: an input segment starts
+    at the origin and runs along u, and its refined nodes are exactly
+    origin + k step u, k = 0 .. pieces (to 1e-6 of a step, by projection),
+    at least ALIGN_PIECES pieces, step within the cap's bounds."""
+    domain = bm.Domain.from_loops(loops)
+    field = SizeField.from_domain(domain, size=size)
+    fine = refined_domain(domain, field)
+    frame = _wall_frame(domain, fine, float(field.cap))
+    if frame is None:
+        return
+    a, u, step = frame
+    P, S = np.asarray(domain.points), np.asarray(domain.segments)
+    ends = [P[j] - P[i] for i, j in S if np.array_equal(P[i], a)
+            and np.allclose((P[j] - P[i]) / np.hypot(*(P[j] - P[i])), u, atol=1e-12)]
+    assert len(ends) == 1
+    length = float(np.hypot(*ends[0]))
+    F = np.asarray(fine.points) - a
+    on = np.abs(F[:, 0] * u[1] - F[:, 1] * u[0]) <= 1e-9 * length
+    t = F[on, 0] * u[0] + F[on, 1] * u[1]
+    k = np.sort(t[(t >= -1e-9 * length) & (t <= length * (1 + 1e-9))]) / step
+    assert len(k) - 1 >= ALIGN_PIECES and np.abs(k - np.arange(len(k))).max() <= 1e-6
+    assert (1 - ALIGN_SLACK) * field.cap <= step <= (1 + ALIGN_OVER) * field.cap
+
+
+def test_a_wall_graded_toward_a_sharp_corner_does_not_set_the_lattice():
+    """The 30-60 right triangle at area/500: its longest wall, the
+    hypotenuse, is graded toward the 30 degree corner, so the lattice
+    follows the vertical wall (20 pieces 2.1% over the size), whose nodes
+    are lattice nodes: the triangles along it, away from the corners, are
+    equilateral (reference formula)."""
+    domain = bm.Domain.from_loops([np.array([(0, 0), (math.sqrt(3), 0), (0, 1)])])
+    m = bm.mesh(domain, max_area=domain.area / 500, insertion="frontal")
+    X, T = np.asarray(m.points), np.asarray(m.triangles)
+    wall = (X[:, 0] == 0.0) & (X[:, 1] > 0.2) & (X[:, 1] < 0.8)
+    along = wall[T].any(axis=1)
+    assert along.sum() >= 20
+    assert O.radius_ratio_reference(X, T[along]).min() >= 0.999
 
 
 def _edges(T):

@@ -450,7 +450,7 @@ def test_the_portfolio_ranking_follows_its_rule():
     the documented rule: fewer elements below 0.7 first, then a count that
     fits the field, then a higher mean with a minimum that is at least the
     other's or at least MIN_ENOUGH, at a count within BOTH_COUNT; means
-    within MEAN_TIE ranked by their minimum."""
+    within MEAN_TIE ranked by their minimum; minima within MIN_TIE tie."""
     better, enough = pipeline._better, pipeline.MIN_ENOUGH
     n = 100
     base = _Rated(*([0.95] * (n - 1) + [0.85]))
@@ -462,6 +462,9 @@ def test_the_portfolio_ranking_follows_its_rule():
     assert better(_Rated(*([0.96] * (n - 1) + [0.85])), base, n)
     # a higher mean with a lower minimum, below MIN_ENOUGH: no
     assert not better(_Rated(*([0.97] * (n - 1) + [0.84])), base, n)
+    # unless the minima tie within MIN_TIE (both at a sharp corner's bound)
+    assert better(_Rated(*([0.97] * (n - 1) + [0.85 - 0.5 * pipeline.MIN_TIE])), base, n)
+    assert not better(_Rated(*([0.97] * (n - 1) + [0.85 - 2 * pipeline.MIN_TIE])), base, n)
     # a higher mean with a lower minimum that is still above MIN_ENOUGH: yes
     high = _Rated(*([0.95] * (n - 1) + [0.95]))
     assert better(_Rated(*([0.97] * (n - 1) + [enough + 0.01])), high, n)
