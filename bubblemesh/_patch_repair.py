@@ -55,6 +55,7 @@ COMPASS_ROUNDS = 3
 POLISH_SWEEPS = 3
 INNER_DROP = 2e-3  # removals off the walls' first row may lower the mean by this in all
 CANDIDATES = 8  # nodes (triangles: a quarter) tried per round by balance_count
+MEAN_CANDIDATES = 24  # nodes tried per round when removals are ranked by the mean
 
 
 def repair_worst(X, T, segments, movable, limit, below, rounds, counts, halvings, steps):
@@ -81,19 +82,24 @@ def repair_worst(X, T, segments, movable, limit, below, rounds, counts, halvings
 
 
 def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings, steps,
-                  floor=None):
+                  floor=None, shielded=None, by_mean=True):
     """While the element count is above ``counts`` (low, high), remove the
     free node whose star is most crowded for the size field (smallest summed
-    area over the areas ``size`` asks for) that can go, or failing that the
-    most crowded whose triangles touch no wall node while the mean stays
-    within INNER_DROP of its start; while it is below,
-    insert a point in the sparsest triangle (an edge midpoint or its
-    centroid).  Of the CANDIDATES tried per round the variant with the
-    highest smallest ratio of its changed triangles (then mesh mean) is kept
-    if that ratio is not below the mesh's minimum (or ``floor``, where that
-    is lower: removals may then lower the minimum down to it) and the area
-    bounds hold.  ``size`` maps (k, 2) points to (k,) sizes; the rest and the
-    result as :func:`repair_worst`."""
+    area over the areas ``size`` asks for) that can go, the ``shielded``
+    nodes (n,) only when no other can, or failing that the most crowded
+    whose triangles touch no wall node while the mean stays within
+    INNER_DROP of its start; of the MEAN_CANDIDATES tried per round the
+    removal leaving the highest mesh mean (then the highest smallest ratio
+    of its changed triangles) is kept, or without ``by_mean`` of CANDIDATES
+    the other way round.
+    While the count is below, insert a point in the sparsest triangle (an
+    edge midpoint or its centroid), the variant with the highest smallest
+    ratio (then mesh mean) kept.  Either only if that ratio is not below
+    the mesh's minimum (or ``floor``, where that is lower: removals may then
+    lower the minimum down to it) and the area bounds hold.  ``size`` maps
+    (k, 2) points to (k,) sizes; the rest and the result as
+    :func:`repair_worst`."""
+    count = MEAN_CANDIDATES if by_mean else CANDIDATES
     lowest = float(triangle_quality(np.asarray(X, np.float64), np.asarray(T, np.int64)).mean()
                    if len(T) else 1.0) - INNER_DROP
 
@@ -106,17 +112,20 @@ def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings
         if m > counts[1]:
             crowd = np.bincount(T.ravel(), np.repeat(fill, 3), len(X))
             crowd[~free] = np.inf
-            best = _best_of(X, T, q, ptr, idx, _removals(T, ptr, idx, crowd), free, limit,
-                            walls, halvings, steps, low, None)
-            if best is not None:
-                return best
+            tiers = [crowd] if shielded is None else [
+                np.where(_padded(shielded, len(X)), np.inf, crowd), crowd]
+            for tier in tiers:
+                best = _best_of(X, T, q, ptr, idx, _removals(T, ptr, idx, tier, count), free,
+                                limit, walls, halvings, steps, low, None, by_mean)
+                if best is not None:
+                    return best
             # the most crowded are often a wall's first row, where no node can go:
             # then the most crowded of the nodes off it
             walled = np.zeros(len(X), np.bool_)
             walled[T[(~free[T]).any(axis=1)].ravel()] = True
             crowd[walled] = np.inf
-            return _best_of(X, T, q, ptr, idx, _removals(T, ptr, idx, crowd), free, limit,
-                            walls, halvings, steps, low, lowest)
+            return _best_of(X, T, q, ptr, idx, _removals(T, ptr, idx, crowd, count), free,
+                            limit, walls, halvings, steps, low, lowest, by_mean)
         else:
             order = np.lexsort((np.arange(m), -fill))[:CANDIDATES // 4]
             tries = [(T[t], [point], -1) for t in order for point in
@@ -128,10 +137,15 @@ def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings
     return _rounds(X, T, segments, movable, limit, rounds, pick)
 
 
-def _removals(T, ptr, idx, crowd):
-    """Variants removing each of the CANDIDATES nodes of least ``crowd``
+def _padded(mask, n):
+    """``mask`` for the first nodes, False for the nodes inserted since."""
+    return np.concatenate([np.asarray(mask, np.bool_), np.zeros(n - len(mask), np.bool_)])
+
+
+def _removals(T, ptr, idx, crowd, count):
+    """Variants removing each of the ``count`` nodes of least ``crowd``
     (finite), ties by index."""
-    order = np.lexsort((np.arange(len(crowd)), crowd))[:CANDIDATES]
+    order = np.lexsort((np.arange(len(crowd)), crowd))[:count]
     return [(np.unique(T[idx[ptr[v]:ptr[v + 1]]]), [], int(v))
             for v in order if np.isfinite(crowd[v])]
 
@@ -244,12 +258,13 @@ def _best_variant(X, T, q, ptr, idx, t, free, limit, walls, halvings, steps, cou
                     lowest)
 
 
-def _best_of(X, T, q, ptr, idx, tries, free, limit, walls, halvings, steps, floor, mean):
+def _best_of(X, T, q, ptr, idx, tries, free, limit, walls, halvings, steps, floor, mean,
+             by_mean=False):
     """The best of the variants ``tries`` (patch corner nodes, added points,
-    removed node) by (smallest ratio of the changed triangles, mesh mean):
-    each must raise that smallest ratio (``floor`` None) or keep it at least
-    ``floor``, keep every area bound and leave a mesh mean of at least
-    ``mean`` (None: any)."""
+    removed node) by (smallest ratio of the changed triangles, mesh mean),
+    or ``by_mean`` the other way round: each must raise that smallest ratio
+    (``floor`` None) or keep it at least ``floor``, keep every area bound
+    and leave a mesh mean of at least ``mean`` (None: any)."""
     best, total, m = None, float(q.sum()), len(T)
     for corners, added, removed in tries:
         growth = 2 * len(added) - (2 if removed >= 0 else 0)
@@ -265,6 +280,8 @@ def _best_of(X, T, q, ptr, idx, tries, free, limit, walls, halvings, steps, floo
         score = (low, (total + gain) / (m + growth))
         if mean is not None and score[1] < mean:
             continue
+        if by_mean:
+            score = score[::-1]
         if best is None or score > best[-1]:
             best = (patch, made, np.asarray(added).reshape(-1, 2), removed, nodes, positions,
                     score)

@@ -131,6 +131,7 @@ BALANCE_WINDOW = 0.03  # a count further off the field's gets nodes removed or i
 BALANCE_OPS = 32  # at most this many
 BALANCE_SHARE = 0.05  # nor when the count is further off than this share of the field's
 BALANCE_BELOW = 20_000  # and only in meshes this small (in larger, 32 nodes are < 0.4%)
+FINE_WALL = 0.8  # the balance takes nodes last from the first row of walls finer than this
 BOTH_BELOW, BOTH_COUNT = 5000, 0.03  # both insertions up to this many elements (auto)
 OTHERS = ((True, True), (False, False))  # the other (frontal, seeded) meshes tried then
 FINAL_SWEEPS, FINAL_BELOW = 10, 20_000  # the last mean polish: sweeps, largest mesh
@@ -799,6 +800,21 @@ def _relaxed(mesh, max_area):
 
 
 def _repaired(mesh, max_area, field):
+    """The repair before the last polish (:func:`_repaired_once`), its
+    first balance's removals ranked by the mesh mean they leave; where that
+    balance ran and the result keeps a triangle below REPAIR_BELOW, again
+    with them ranked by their smallest ratio, and the better
+    (:func:`_better`) kept: a removal that pays in the mean can take the
+    node a corner's repair needed."""
+    repaired, balanced = _repaired_once(mesh, max_area, field, True)
+    if balanced and _smallest_ratio(repaired.points, repaired.triangles) < REPAIR_BELOW:
+        other, _ = _repaired_once(mesh, max_area, field, False)
+        if _better(other, repaired, field_count(field, mesh.points, mesh.triangles)):
+            return other
+    return repaired
+
+
+def _repaired_once(mesh, max_area, field, by_mean):
     """The repair before the last polish (:mod:`bubblemesh._patch_repair`).
 
     In a mesh of at most BALANCE_BELOW elements, while the element count is
@@ -817,18 +833,24 @@ def _repaired(mesh, max_area, field):
     above the plain repair's, and is kept if it ends better
     (:func:`_spare_kept`): a node moved, in effect, from where the field has
     one too many to where the worst triangle needs one.  An inserted node's
-    radius is half its mean edge (as the area bound's)."""
+    radius is half its mean edge (as the area bound's).  With ``by_mean``
+    the first balance takes the nodes of the first row of walls finer than
+    FINE_WALL times the field's size last (:func:`_fine_walls_first_row`)
+    and ranks its removals by the mesh mean they leave, else by their
+    smallest ratio (:func:`~bubblemesh._patch_repair.balance_count`); the
+    balance after the spare repair, whose floor keeps the minimum, always
+    the first way.  Returns (mesh, whether the first balance ran)."""
     X, T = mesh.points, mesh.triangles
     poor = REPAIR_OPS and triangle_quality(X, T).min(initial=1.0) < REPAIR_BELOW
     if not poor and len(T) > BALANCE_BELOW:
-        return mesh
+        return mesh, False
     asked = field_count(field, X, T)
     miss = abs(len(T) - min(max(len(T), asked * (1.0 - BALANCE_WINDOW)),
                             asked * (1.0 + BALANCE_WINDOW)))
     # beyond, BALANCE_OPS nodes cannot mend it, or mending it would remake the mesh
     off = 0 < miss <= min(2 * BALANCE_OPS, BALANCE_SHARE * asked)
     if not off and not poor:
-        return mesh
+        return mesh, False
     segments = np.asarray(mesh.segments)
     regions = getattr(mesh.domain, "regions", None)
     n, N, old, operations = len(X), mesh.neighbors, np.arange(len(X)), 0
@@ -848,8 +870,9 @@ def _repaired(mesh, max_area, field):
         return asked * (1.0 - share), asked * (1.0 + share)
 
     if off:
+        shielded = _fine_walls_first_row(X, T, segments, field) if by_mean else None
         run(balance_count, window(BALANCE_WINDOW), field, BALANCE_OPS, MEAN_HALVINGS,
-            MEAN_STEPS)
+            MEAN_STEPS, None, shielded, by_mean)
     if poor:
         before = len(T)
         run(repair_worst, REPAIR_BELOW, REPAIR_OPS, window(REPAIR_WINDOW), MEAN_HALVINGS,
@@ -867,16 +890,32 @@ def _repaired(mesh, max_area, field):
                 MEAN_HALVINGS, MEAN_STEPS)
             if not window(BALANCE_WINDOW)[0] <= len(T) <= window(BALANCE_WINDOW)[1]:
                 run(balance_count, window(BALANCE_WINDOW), field, BALANCE_OPS, MEAN_HALVINGS,
-                    MEAN_STEPS, floor + RISE)
+                    MEAN_STEPS, floor + RISE, _fine_walls_first_row(X, T, segments, field))
             if not _spare_kept(X, T, plain[:2], asked, floor):
                 X, T, N, old, operations = plain
     if not operations:
-        return mesh
+        return mesh, off
     radii = np.where(old >= 0, np.asarray(mesh.radii)[np.maximum(old, 0)],
                      _half_mean_edge(X, T))
     stats = replace(mesh.optimization, repairs=operations, repair_nodes=len(X) - n,
                     min_ratio=_smallest_ratio(X, T))
-    return replace(mesh, points=X, triangles=T, neighbors=N, radii=radii, optimization=stats)
+    return replace(mesh, points=X, triangles=T, neighbors=N, radii=radii,
+                   optimization=stats), off
+
+
+def _fine_walls_first_row(X, T, segments, field):
+    """The nodes of the triangles on the nodes of wall pieces shorter than
+    FINE_WALL times the field's size: such a wall's first row follows its
+    spacing, and a node taken out of it leaves a wall node with two
+    triangles (:func:`~bubblemesh._patch_repair.balance_count` takes them
+    last)."""
+    S = np.asarray(segments)
+    length = np.hypot(*(X[S[:, 1]] - X[S[:, 0]]).T)
+    fine = np.zeros(len(X), np.bool_)
+    fine[S[length < FINE_WALL * np.asarray(field(0.5 * (X[S[:, 0]] + X[S[:, 1]])))].ravel()] = True
+    shielded = np.zeros(len(X), np.bool_)
+    shielded[T[fine[T].any(axis=1)].ravel()] = True
+    return shielded
 
 
 def _minmaxed(mesh, max_area):

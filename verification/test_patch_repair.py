@@ -241,11 +241,12 @@ def test_bm_mesh_repairs_a_hole_close_to_a_wall(monkeypatch):
     assert repaired.optimization.repair_nodes == len(repaired.points) - len(plain.points)
 
 
-def _balance(X, tri, segments, n_b, limit, counts, size, rounds=6, floor=None):
+def _balance(X, tri, segments, n_b, limit, counts, size, rounds=6, floor=None, shielded=None,
+             by_mean=True):
     movable = np.arange(len(X)) >= n_b
     movable[np.unique(segments)] = False
     return balance_count(X, tri, segments, movable, limit, counts, size, rounds, HALVINGS,
-                         STEPS, floor)
+                         STEPS, floor, shielded, by_mean)
 
 
 def _uniform(h):
@@ -293,6 +294,49 @@ def test_the_count_balance_removes_the_most_crowded_node():
                               (0, len(tri) - 2), _uniform(1.0))
     assert ops == 1 and n not in old and len(t) == len(tri) - 2
     np.testing.assert_allclose(O.radius_ratio_reference(Y, t), 1.0, atol=1e-9)
+
+
+def test_the_count_balance_takes_a_shielded_node_only_when_no_other_can_go():
+    """Two centroid nodes crowd a lattice, asked for two triangles fewer:
+    the balance ranked by the mean removes some node v, ranked by the
+    smallest ratio another, u.  With v shielded a removal still happens and
+    takes an unshielded node (u could go); with every free node but u
+    shielded it takes u."""
+    X, tri, segments, n_b, n = _lattice_with_centroid_node()
+    inner = np.arange(len(X)) >= n_b
+    t = [k for k in range(len(tri)) if inner[tri[k]].all()
+         and not np.isin(tri[k], tri[(tri == n).any(axis=1)]).any()][0]
+    X = np.vstack([X, X[tri[t]].mean(axis=0)])
+    a, b, c = tri[t]
+    tri = np.vstack([np.delete(tri, t, axis=0), [(a, b, len(X) - 1), (b, c, len(X) - 1),
+                                                 (c, a, len(X) - 1)]])
+
+    def removed(shielded=None, by_mean=True):
+        _, _, old, ops = _balance(X, tri, segments, n_b, np.full(len(tri), np.inf),
+                                  (0, len(tri) - 2), _uniform(1.0), rounds=1,
+                                  shielded=shielded, by_mean=by_mean)
+        assert ops == 1
+        return (set(range(len(X))) - set(old.tolist())).pop()
+
+    v, u = removed(), removed(by_mean=False)
+    assert u != v  # the premise
+    assert removed(np.arange(len(X)) == v) != v
+    assert removed((np.arange(len(X)) >= n_b) & (np.arange(len(X)) != u)) == u
+
+
+@pytest.mark.heavy
+@given(corner_domains(max_holes=2), st.sampled_from([0.3, 0.2]), st.integers(0, 2**32 - 1))
+def test_ranked_by_mean_a_removal_leaves_the_higher_mean(loops, size, seed):
+    """One removal from the same candidates, ranked by the mean they leave
+    and by their smallest ratio: the first leaves a mesh mean (reference
+    formula) at least the second's."""
+    m, X, tri, _ = _jittered(loops, size, seed)
+    limit = np.full(len(tri), np.inf)
+    out = [_balance(X, tri, m.segments, m.n_boundary, limit, (0, len(tri) - 2),
+                    _uniform(size), rounds=1, by_mean=by_mean) for by_mean in (True, False)]
+    if out[0][3] and out[1][3]:
+        means = [O.radius_ratio_reference(Y, t).mean() for Y, t, _, _ in out]
+        assert means[0] >= means[1] - 1e-12
 
 
 @pytest.mark.parametrize("floor", [0.6, 0.8])
@@ -347,6 +391,19 @@ def test_bm_meshes_count_is_balanced_to_the_field(monkeypatch):
     O.check_conforming(out.points, out.triangles, out.segments, area=1.0, rel=1e-9)
     assert out.optimization.repair_nodes == len(out.points) - len(m.points) < 0
     assert len(out.radii) == len(out.points)
+
+
+def test_a_wall_finer_than_the_field_keeps_a_first_row_of_its_spacing():
+    """A 64-gon disk at area/1000: its walls are cut at 0.74 h, and the
+    balance takes nodes out of their first row last, so (almost) every wall
+    node keeps the three triangles a first row of the wall's spacing gives
+    it (before, 14 of its 128 had two)."""
+    t = 2 * np.pi * np.arange(64) / 64
+    domain = bm.Domain.from_loops([np.column_stack([np.cos(t), np.sin(t)])])
+    m = bm.mesh(domain, max_area=domain.area / 1000)
+    wall = np.unique(np.asarray(m.segments))
+    per_node = np.bincount(np.asarray(m.triangles).ravel(), minlength=len(m.points))[wall]
+    assert len(wall) == 128 and (per_node == 2).sum() <= 2
 
 
 @pytest.mark.heavy
