@@ -148,6 +148,7 @@ ROUNDS = {"centroid": 3, "frontal": 1}  # smoothing rounds by default (the front
 RADII_REFRESH = 10  # §3's radii follow the size field at the nodes' positions this often
 ALIGN_PIECES, ALIGN_SLACK = 4, 0.02  # the lattice along a wall cut this finely (_wall_frame)
 ALIGN_OVER = 0.03  # pieces up to this much over the cap still set the lattice (_wall_frame)
+ALIGN_TRIES = 8  # longest input segments tried (each pass is over every boundary node)
 LATTICE_MARGIN = 4.0  # the lattice keeps this many sizes off every boundary node
 WALL_LATTICE_MARGIN = 0.5  # but only this far off walls made of its own edges
 
@@ -451,17 +452,17 @@ def _lattice(domain, field, source):
 def _wall_frame(source, fine, cap):
     """(origin, direction, spacing) of a lattice through the first node of
     an input segment, along it, as fine as its refined pieces: the longest
-    segment cut into at least ALIGN_PIECES equal pieces (to 1e-6 of a piece;
-    a wall graded toward a sharp corner is not) at most ALIGN_SLACK shorter
-    or ALIGN_OVER longer than the cap (the nearest piece count makes them up
-    to 1.3 times the cap).  Then a domain whose walls lie on one lattice (a
-    regular hexagon, an equilateral triangle) is filled by it seamlessly;
-    else None (the lattice along x)."""
+    of the ALIGN_TRIES longest segments cut into at least ALIGN_PIECES equal
+    pieces (to 1e-6 of a piece; a wall graded toward a sharp corner is not)
+    at most ALIGN_SLACK shorter or ALIGN_OVER longer than the cap (the
+    nearest piece count makes them up to 1.3 times the cap).  Then a domain
+    whose walls lie on one lattice (a regular hexagon, an equilateral
+    triangle) is filled by it seamlessly; else None (the lattice along x)."""
     P, S = np.asarray(source.points), np.asarray(source.segments)
     d = P[S[:, 1]] - P[S[:, 0]]
     lengths = np.hypot(d[:, 0], d[:, 1])
     F = np.asarray(fine.points)
-    for k in np.argsort(-lengths, kind="stable"):  # the first of the longest first
+    for k in np.argsort(-lengths, kind="stable")[:ALIGN_TRIES]:  # ties: the first first
         a, length = P[S[k, 0]], float(lengths[k])
         if length < ALIGN_PIECES * (1 - ALIGN_SLACK) * cap:
             return None
