@@ -393,6 +393,7 @@ def test_bm_meshes_count_is_balanced_to_the_field(monkeypatch):
     assert len(out.radii) == len(out.points)
 
 
+@pytest.mark.heavy
 def test_a_wall_finer_than_the_field_keeps_a_first_row_of_its_spacing():
     """A 64-gon disk at area/1000: its walls are cut at 0.74 h, and the
     balance takes nodes out of their first row last, so (almost) every wall
