@@ -24,9 +24,8 @@ lifted (the mesh's minimum cannot rise past it) or after ``rounds``.  Nodes
 keep their triangles, so the mesh stays valid and conforming and boundary
 nodes never move; SLSQP (run on one BLAS thread: its LAPACK calls give
 other bits on other thread counts) and the order of the patches are
-deterministic.  A
-solve that fails (a zero-area or zero-length trial point divides by zero in
-:func:`ratio_rows`; scipy raising) refuses its move.
+deterministic.  A solve that fails (a zero-area or zero-length trial point
+divides by zero in :func:`ratio_rows`; scipy raising) refuses its move.
 """
 
 import math
