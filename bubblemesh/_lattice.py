@@ -39,8 +39,9 @@ def lattice_points(points: np.ndarray, segments: np.ndarray, h: float, margin: f
     lower left of the boundary's bounding box) inside the domain bounded by
     ``segments`` over ``points``, at least ``margin`` h from every boundary
     node, where ``size`` (a callable h(xy)) is h: (K, 2), row by row.
-    ``frame`` (origin, unit direction, spacing): the lattice of that spacing
-    through the origin, its rows along the direction, instead.  With
+    ``frame`` (origin, unit direction, spacing[, row height]): the lattice
+    of that spacing through the origin, its rows along the direction (rows
+    of that height, a stretched lattice, where given), instead.  With
     ``on_lattice_margin``, a boundary node all of whose segments are edges
     of the lattice (:func:`_on_lattice_nodes`) keeps only that many h off
     instead: such a wall is the lattice's own first row."""
@@ -48,12 +49,13 @@ def lattice_points(points: np.ndarray, segments: np.ndarray, h: float, margin: f
     S = np.asarray(segments, dtype=np.int64)
     if frame is None:
         Q, step, axes, anchor = P, h, None, P.min(axis=0)
+        dy = 0.5 * math.sqrt(3.0) * step
     else:
-        origin, u, step = frame
+        origin, u, step = frame[:3]
+        dy = frame[3] if len(frame) > 3 else 0.5 * math.sqrt(3.0) * step
         axes = np.array([[u[0], -u[1]], [u[1], u[0]]])  # columns: u and u turned left
         Q, anchor = _times(P - origin, axes), np.zeros(2)  # the frame's coordinates
     lo, hi = Q.min(axis=0), Q.max(axis=0)
-    dy = 0.5 * math.sqrt(3.0) * step
     rows = np.arange(math.ceil((lo[1] - anchor[1]) / dy), math.floor((hi[1] - anchor[1]) / dy) + 1)
     a, b = Q[S[:, 0]], Q[S[:, 1]]
     found = []
@@ -79,7 +81,7 @@ def lattice_points(points: np.ndarray, segments: np.ndarray, h: float, margin: f
     L += h * JITTER * _offsets(len(L))
     walls = np.zeros(len(P), bool)
     if on_lattice_margin is not None:
-        walls = _on_lattice_nodes(Q, S, anchor, step)
+        walls = _on_lattice_nodes(Q, S, anchor, step, dy)
         near = on_lattice_margin * h
         if walls.any():
             L = L[cKDTree(P[walls]).query(L, k=1, distance_upper_bound=near)[0] >= near]
@@ -93,12 +95,11 @@ def lattice_points(points: np.ndarray, segments: np.ndarray, h: float, margin: f
 
 
 def _on_lattice_nodes(Q: np.ndarray, S: np.ndarray, anchor: np.ndarray,
-                      step: float) -> np.ndarray:
+                      step: float, dy: float) -> np.ndarray:
     """Which boundary nodes (frame coordinates Q) have only lattice edges as
-    segments: both ends on a lattice node and one step apart, to 1e-6 of a
-    step.  A lattice node then lies at least a row's height from each such
-    segment, or on its end."""
-    dy = 0.5 * math.sqrt(3.0) * step
+    segments: both ends on a lattice node (rows ``dy`` apart) and one step
+    apart, to 1e-6 of a step.  A lattice node then lies at least a row's
+    height from each such segment, or on its end."""
     j = np.round((Q[:, 1] - anchor[1]) / dy)
     first = anchor[0] + 0.5 * step * (j % 2)
     i = np.round((Q[:, 0] - first) / step)

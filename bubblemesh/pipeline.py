@@ -70,6 +70,7 @@ import numpy as np
 
 from ._area_bound import FILL, _areas, _walled, bound_areas, triangle_limits
 from ._area_bound import MARGIN as AREA_MARGIN
+from ._channel import straight_channel
 from ._coincident import shared_positions
 from ._corners import split_corners
 from ._flips import (
@@ -282,7 +283,8 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
                                                                  _user_size(size, max_area)),
                                       gradation=gradation)
         _check_scale(domain, field)
-        fine = refined_domain(domain, field)
+        channel = straight_channel(domain, field, float(field.cap))
+        fine = refined_domain(domain, field, splits=None if channel is None else channel.splits)
         field = _with_wedges(domain, field)
     except (TypeError, ValueError) as error:
         raise type(error)(f"mesh: {error}") from None
@@ -297,12 +299,12 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
                    smoothing_rounds=smoothing_rounds,
                    smoothing_sweeps=int(smoothing_sweeps))
     mesh = _mesh_with(domain, fine, field, frontal, True, notes, max_area, progress, clock,
-                      options)
+                      options, channel)
     if insertion == "auto" and not frontal and len(mesh.triangles) <= BOTH_BELOW:
         asked = field_count(field, mesh.points, mesh.triangles)
         for other_frontal, seeded in OTHERS:
             other = _mesh_with(domain, fine, field, other_frontal, seeded, notes, max_area,
-                               progress, clock, options)
+                               progress, clock, options, channel)
             if _better(other, mesh, asked):
                 mesh = other
     return _polished(_minmaxed(mesh, max_area), max_area)
@@ -335,11 +337,12 @@ def _better(a, b, asked):
 
 
 def _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, clock,
-               options):
+               options, channel=None):
     """§2 by frontal or centroid insertion on the refined domain ``fine`` (with
-    ``seeded`` its frontal seeds or lattice), then the stable §3, the area
-    bounds and the relaxed flips (module docstring)."""
-    seeds = (None if not seeded else _lattice(fine, field, domain) if frontal
+    ``seeded`` its frontal seeds or lattice, in the ``channel``'s rows where
+    there is one), then the stable §3, the area bounds and the relaxed flips
+    (module docstring)."""
+    seeds = (None if not seeded else _lattice(fine, field, domain, channel) if frontal
              else _frontal_seeds(fine))
     try:
         generated = generate_sized(fine, field, progress=progress, seeds=seeds, frontal=frontal)
@@ -376,13 +379,14 @@ def _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, 
                            "asks for (sizes far finer than the domain)") from None
 
 
-def refined_domain(domain, field, rounding="nearest"):
+def refined_domain(domain, field, rounding="nearest", splits=None):
     """``domain`` with its segments split where ``field`` asks for it
     (:func:`bubblemesh.refinement.refine_boundary`: the input nodes first and
     unmoved, the new ones on their segments; the piece count rounded to the
-    nearest by default, so the walls' first rows are as dense as the field), as
-    a Domain."""
-    refined = refine_boundary(domain, field, sharp_angle=GRADE_ANGLE, rounding=rounding)
+    nearest by default, so the walls' first rows are as dense as the field;
+    ``splits`` as it takes them), as a Domain."""
+    refined = refine_boundary(domain, field, sharp_angle=GRADE_ANGLE, rounding=rounding,
+                              splits=splits)
     try:
         return refined.to_domain()
     except GeometryError:  # a node an ulp off its segment touches a part a few ulps away
@@ -434,19 +438,22 @@ def _check_scale(domain, field):
                            "or split the domain, or use paper=True")
 
 
-def _lattice(domain, field, source):
+def _lattice(domain, field, source, channel=None):
     """The close-packed lattice of the field's cap over the bulk of the domain
     (:mod:`bubblemesh._lattice`), refused in one line when it would not fit in
-    memory; None without a finite cap.  Aligned with the longest segment of
-    ``source`` (the input domain) where :func:`_wall_frame` says so."""
+    memory; None without a finite cap.  In the ``channel``'s rows
+    (:mod:`bubblemesh._channel`) where there is one, else aligned with the
+    longest segment of ``source`` (the input domain) where :func:`_wall_frame`
+    says so."""
     cap = float(field.cap)
     if not math.isfinite(cap):
         return None
     refuse_beyond_memory(domain.area / (math.sqrt(3) / 4 * cap * cap), "the size cap",
                          "about", f"the cap {cap:.3g} is far finer than the domain; pass a "
                          "larger size")
-    return lattice_points(domain.points, domain.segments, cap, LATTICE_MARGIN, field,
-                          _wall_frame(source, domain, cap), WALL_LATTICE_MARGIN)
+    frame = channel.frame if channel is not None else _wall_frame(source, domain, cap)
+    return lattice_points(domain.points, domain.segments, cap, LATTICE_MARGIN, field, frame,
+                          WALL_LATTICE_MARGIN)
 
 
 def _wall_frame(source, fine, cap):

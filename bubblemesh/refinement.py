@@ -155,7 +155,7 @@ def _graph_domain(refined: RefinedBoundary, source: Domain, marks, interior) -> 
 
 def refine_boundary(
     domain_or_loops, h, *, resolution: float = 0.125, max_nodes: int = MAX_SOURCES,
-    sharp_angle: float = 0.0, rounding: str = "up",
+    sharp_angle: float = 0.0, rounding: str = "up", splits=None,
 ) -> RefinedBoundary:
     """Split the boundary segments to the size ``h`` (a :class:`SizeField`, a
     positive number or a vectorised callable (n, 2) -> (n,)).
@@ -167,9 +167,12 @@ def refine_boundary(
     rest of them the nodes above.  ``rounding="nearest"`` takes n = round(I)
     pieces instead of ceil(I) (at least ceil(I / NEAREST_CAP)): pieces up to
     NEAREST_CAP h, but on average as long as h, so the first row of elements
-    along a wall is as dense as the field, not up to twice as dense.  Raises
-    ValueError for a bad ``h`` or ``rounding`` and when more than
-    ``max_nodes`` samples or nodes would be needed."""
+    along a wall is as dense as the field, not up to twice as dense.
+    ``splits`` {(i, j): t}: the new nodes of the input segment from node i
+    to node j (of a given Domain) at the increasing parameters t in (0, 1)
+    instead (a segment with graded corner walls keeps those).  Raises
+    ValueError for a bad ``h``, ``rounding`` or ``splits`` and when more
+    than ``max_nodes`` samples or nodes would be needed."""
     given = isinstance(domain_or_loops, Domain)
     domain = domain_or_loops if given else Domain.from_loops(domain_or_loops)
     rings = _input_rings(domain, given)
@@ -194,6 +197,8 @@ def refine_boundary(
         node_a, node_b = node_a[canon], node_b[canon]
     graded = wedge_parameters(ca, cb, node_a, node_b, corner_angles(domain), size,
                               float(sharp_angle))
+    if splits:
+        graded = _with_splits(graded, node_a, node_b, splits, given)
     seg, t, values = _samples(ca, cb, length, size, resolution, max_nodes)
     t_new, ptr = _split_parameters(seg, t, values, length, len(ca), max_nodes, graded,
                                    rounding == "nearest")
@@ -202,6 +207,35 @@ def refine_boundary(
         points, status, offset, ptr = _expand(points, status, offset, ptr, canon, flip)
     out = _assemble(rings, a, points, status, offset, ptr)
     return replace(out, source=source)
+
+
+def _with_splits(graded, node_a, node_b, splits, given):
+    """The graded parameters (seg, t, lo, hi) with the ``splits`` of
+    :func:`refine_boundary` added: their segments' t given, nothing left to
+    split to the field ([lo, hi] empty)."""
+    if not given:
+        raise ValueError("splits needs a Domain: they name its segments by their nodes")
+    fixed_seg, fixed_t, lo, hi = graded
+    lo, hi = lo.copy(), hi.copy()
+    index = {(int(i), int(j)): k for k, (i, j) in enumerate(zip(node_a, node_b))}
+    segs, ts = [fixed_seg], [fixed_t]
+    for key, t in splits.items():
+        k = index.get((int(key[0]), int(key[1])))
+        t = np.asarray(t, dtype=np.float64).reshape(-1)
+        if k is None:
+            raise ValueError(f"splits: ({key[0]}, {key[1]}) is not a segment of the domain")
+        if not (np.all(np.isfinite(t)) and np.all(t > 0) and np.all(t < 1)
+                and np.all(np.diff(t) > 0)):
+            raise ValueError(f"splits: the parameters of ({key[0]}, {key[1]}) must increase "
+                             "within (0, 1)")
+        if lo[k] > 0 or hi[k] < 1:  # graded toward a sharp corner: the grading wins
+            continue
+        segs.append(np.full(len(t), k, np.int64))
+        ts.append(t)
+        lo[k] = hi[k] = 0.0
+    seg, t = np.concatenate(segs), np.concatenate(ts)
+    order = np.lexsort((t, seg))
+    return seg[order], t[order], lo, hi
 
 
 def _canonical(domain: Domain | None):

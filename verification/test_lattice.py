@@ -35,10 +35,11 @@ def _expected(P, loops, h, margin, field, frame=None, segments=None, wall_margin
                  for j in range(int((hi[1] - lo[1]) / dy) + 1)
                  for i in range(-1, int((hi[0] - lo[0]) / h) + 2)]
         nodes = np.array(nodes)
-    else:  # every i a + j b through the origin, a = s u, b = s (u + sqrt(3) u_left) / 2
-        o, u, step = frame
+    else:  # every i a + j b through the origin, a = s u, b = s u / 2 + rise u_left
+        o, u, step = frame[:3]
+        rise = frame[3] if len(frame) > 3 else math.sqrt(3) / 2 * step
         a = step * np.asarray(u)
-        b = step * 0.5 * (np.asarray(u) + math.sqrt(3) * np.array([-u[1], u[0]]))
+        b = step * 0.5 * np.asarray(u) + rise * np.array([-u[1], u[0]])
         reach = int(np.hypot(*(P - o).T).max() / (0.5 * step)) + 2
         i, j = np.meshgrid(np.arange(-2 * reach, 2 * reach + 1), np.arange(-reach, reach + 1))
         nodes = o + i.ravel()[:, None] * a + j.ravel()[:, None] * b
@@ -81,15 +82,18 @@ def test_lattice_is_the_filtered_triangular_lattice(loops, h, margin):
 
 
 @given(corner_domains(max_holes=1), st.sampled_from([0.3, 0.15]), st.floats(0.0, 2 * math.pi),
-       st.integers(0, 20), st.floats(0.9, 1.0))
-def test_a_lattice_in_a_frame_is_that_lattice_filtered(loops, h, angle, node, shrink):
-    """With a frame (origin, direction, spacing): the nodes i a + j b through
-    the origin (a = s u, b at 60 degrees to it), filtered as without."""
+       st.integers(0, 20), st.floats(0.9, 1.0), st.one_of(st.none(), st.floats(0.7, 1.1)))
+def test_a_lattice_in_a_frame_is_that_lattice_filtered(loops, h, angle, node, shrink, stretch):
+    """With a frame (origin, direction, spacing[, row height]): the nodes
+    i a + j b through the origin (a = s u, b at 60 degrees to it, or half a
+    step along and a row height across), filtered as without."""
     domain = bm.Domain.from_loops(loops)
     field = SizeField.from_domain(domain, size=h)
     fine = refine_boundary(domain, field).to_domain()
     P = np.asarray(fine.points)
     frame = (P[node % len(P)], np.array([math.cos(angle), math.sin(angle)]), h * shrink)
+    if stretch is not None:
+        frame += (stretch * math.sqrt(3) / 2 * h * shrink,)
     got = lattice_points(P, fine.segments, h, 1.5, field, frame)
     want, unsure = _expected(P, fine.loops, h, 1.5, field, frame)
     every = np.concatenate([want, unsure])

@@ -1,0 +1,205 @@
+"""Whole rows across a straight channel (bubblemesh._channel, bm.mesh only).
+
+The stretched triangle's ratio against eq. 10 computed here from its side
+lengths (Heron); the rows and pieces against a brute-force search over every
+whole-row choice; the channel found on rectangles in any position, and not
+where the walls are not a strip (a hole between them, shifted or tilted
+walls, a graded field); refine_boundary's splits at exactly the parameters
+asked; and bm.mesh on strips: a valid mesh within 5% of the field's count
+whose interior nodes lie on the m rows across it, the far wall's nodes on
+the lattice's row, at any rotation."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import oracles as O
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+import bubblemesh as bm
+from bubblemesh._channel import (
+    ASPECT,
+    FEWER,
+    LEAST_PIECES,
+    LEAST_RATIO,
+    isosceles_ratio,
+    rows_for,
+    straight_channel,
+)
+from bubblemesh.refinement import refine_boundary
+from bubblemesh.sizing import SizeField
+
+
+def _heron_ratio(P):
+    a, b, c = (math.dist(P[i], P[(i + 1) % 3]) for i in range(3))
+    s = 0.5 * (a + b + c)
+    area = math.sqrt(max(s * (s - a) * (s - b) * (s - c), 0.0))
+    return 2 * (area / s) / (a * b * c / (4 * area))
+
+
+@given(st.floats(0.01, 100.0), st.floats(0.01, 100.0))
+def test_the_stretched_triangle_ratio_is_eq10_of_that_triangle(base, height):
+    want = _heron_ratio([(0.0, 0.0), (base, 0.0), (0.5 * base, height)])
+    assert isosceles_ratio(base, height) == pytest.approx(want, rel=1e-9, abs=1e-12)
+
+
+@given(st.floats(0.05, 5.0), st.floats(1.0, 50.0), st.floats(0.02, 1.0))
+def test_rows_are_the_best_whole_choice_not_over_the_fields_count(width, length, h):
+    """m of floor and ceil of the rows an equilateral size h gives, the
+    2 m n triangles of base a and height b never more than the field's
+    count (the area over sqrt(3) h^2 / 4); no other m, and no n with 2 m n
+    between FEWER times that count and it, makes a better triangle."""
+    m, n, a, b = rows_for(width, length, h)
+    x = width / (math.sqrt(3) / 2 * h)
+    rows = {max(1, math.floor(x)), max(1, math.ceil(x))}
+    assert m in rows
+    assert m * b == pytest.approx(width, rel=1e-12) and n * a == pytest.approx(length, rel=1e-12)
+    count = length * width / (math.sqrt(3) / 4 * h * h)
+    assert 2 * m * n <= count * (1 + 1e-12) or n == 1
+    best = isosceles_ratio(a, b)
+    for mm in rows:
+        for nn in range(1, int(count) + 2):
+            if FEWER * count <= 2 * mm * nn <= count:
+                assert isosceles_ratio(length / nn, width / mm) <= best + 1e-12, (mm, nn)
+
+
+def _rectangle(length, width, angle, origin):
+    u = np.array([math.cos(angle), math.sin(angle)])
+    v = np.array([-u[1], u[0]])
+    return np.array([origin, origin + length * u, origin + length * u + width * v,
+                     origin + width * v])
+
+
+@given(st.floats(3.0, 20.0), st.floats(0.3, 1.0), st.integers(0, 359),
+       st.integers(-50, 50), st.floats(0.1, 0.3))
+def test_a_rectangle_is_a_channel_along_its_long_walls(length, width, degrees, shift, h):
+    """Channels are found in any position; where the stretched triangle is
+    too poor, the walls in too few pieces or too short for the width, none."""
+    angle = math.radians(degrees)
+    domain = bm.Domain.from_loops([_rectangle(length, width, angle, np.array([shift, -shift]))])
+    field = SizeField.from_domain(domain, size=h)
+    channel = straight_channel(domain, field, float(field.cap))
+    m, n, a, b = rows_for(width, length, float(field.cap))
+    if n < LEAST_PIECES or isosceles_ratio(a, b) < LEAST_RATIO or length < ASPECT * width:
+        assert channel is None
+        return
+    assert channel is not None and channel.rows == m
+    P, S = np.asarray(domain.points), np.asarray(domain.segments)
+    lengths = np.hypot(*(P[S[:, 1]] - P[S[:, 0]]).T)
+    assert lengths[channel.wall] == pytest.approx(length, rel=1e-9)
+    assert lengths[channel.far] == pytest.approx(length, rel=1e-9)
+    assert set(S[channel.wall]).isdisjoint(S[channel.far])
+    assert len(channel.splits) == (4 if m > 1 else 2)
+
+
+@pytest.mark.parametrize("loops", [
+    # a hole between the long walls
+    [np.array([(0, 0), (10, 0), (10, 1), (0, 1)], float),
+     np.array([(5, 0.4), (5.2, 0.6), (5.4, 0.4)], float)],
+    # the far wall shifted along: a parallelogram
+    [np.array([(0, 0), (10, 0), (10.5, 1), (0.5, 1)], float)],
+    # the far wall tilted: a trapezoid
+    [np.array([(0, 0), (10, 0), (10, 1.02), (0, 1)], float)],
+    # a notch reaching into the strip from the far wall
+    [np.array([(0, 0), (10, 0), (10, 1), (6, 1), (5, 0.5), (4, 1), (0, 1)], float)],
+])
+def test_no_channel_where_the_walls_are_not_a_strip(loops):
+    domain = bm.Domain.from_loops(loops)
+    field = SizeField.from_domain(domain, size=0.15)
+    assert straight_channel(domain, field, float(field.cap)) is None
+
+
+def test_no_channel_where_the_field_is_graded():
+    domain = bm.Domain.from_loops([np.array([(0, 0), (10, 0), (10, 1), (0, 1)], float)])
+    field = SizeField.from_domain(domain, size=lambda p: 0.1 + 0.01 * p[:, 0])
+    assert straight_channel(domain, field, float(field.cap)) is None
+
+
+@given(st.lists(st.floats(0.01, 0.99), min_size=1, max_size=12, unique=True),
+       st.integers(0, 3))
+def test_splits_put_the_nodes_at_exactly_those_parameters(ts, side):
+    """The split segment's new nodes are a + t (b - a) for the given t (to
+    the refinement's rounding of t), the other segments refined as without
+    splits."""
+    domain = bm.Domain.from_loops([np.array([(0, 0), (4, 0), (4, 3), (0, 3)], float)])
+    S = np.asarray(domain.segments)
+    i, j = (int(v) for v in S[side])
+    t = np.sort(np.asarray(ts))
+    fine = refine_boundary(domain, 0.5, splits={(i, j): t}).to_domain()
+    plain = refine_boundary(domain, 0.5).to_domain()
+    P = np.asarray(domain.points)
+    want = P[i] + t[:, None] * (P[j] - P[i])
+    new = np.asarray(fine.points)
+    for w in want:  # t rounded to 40 bits puts a node exactly on its segment
+        assert np.abs(new - w).sum(axis=1).min() <= 2.0 ** -38, w
+    for a, b in S.tolist():
+        want_pieces = len(t) + 1 if (a, b) == (i, j) else _pieces_on(plain, P, a, b)
+        assert _pieces_on(fine, P, a, b) == want_pieces, (a, b)
+
+
+def _pieces_on(refined, P, i, j):
+    """The pieces the plain refinement cut segment i-j into."""
+    Q = np.asarray(refined.points)
+    a, b = P[i], P[j]
+    d = b - a
+    off = np.abs((Q[:, 0] - a[0]) * d[1] - (Q[:, 1] - a[1]) * d[0])
+    along = ((Q - a) @ d) / (d @ d)
+    return int(np.sum((off <= 1e-12) & (along > 1e-12) & (along < 1 - 1e-12))) + 1
+
+
+@pytest.mark.parametrize("bad", [{(0, 2): [0.5]}, {(0, 1): [0.5, 0.4]}, {(0, 1): [0.0, 0.5]},
+                                 {(0, 1): [float("nan")]}, {(0, 1): [1.0]}])
+def test_bad_splits_are_value_errors(bad):
+    domain = bm.Domain.from_loops([np.array([(0, 0), (4, 0), (4, 3), (0, 3)], float)])
+    with pytest.raises(ValueError, match="splits"):
+        refine_boundary(domain, 0.5, splits=bad)
+
+
+@pytest.mark.parametrize("k", [70, 100, 200, 300, 500, 1000])
+@pytest.mark.parametrize("angle", [0.0, 0.7])
+def test_a_strip_is_meshed_in_whole_rows(k, angle):
+    """A 10 x 0.5 strip at max_area = area / k, turned by ``angle``: a valid,
+    conforming mesh within 5% of the field's count; its long walls cut
+    into the n pieces of the m rows (:func:`rows_for`); in the middle half
+    of the strip its nodes lie within 5% of a row's height of the m + 1
+    lines across it and its triangles' ratios within 0.01 of the stretched
+    lattice's; no triangle below 0.8."""
+    length, width = 10.0, 0.5
+    corners = _rectangle(length, width, angle, np.array([1.0, 2.0]))
+    domain = bm.Domain.from_loops([corners])
+    mesh = bm.mesh(domain, max_area=length * width / k)
+    P, T = mesh.points, mesh.triangles
+    O.check_valid(P, T, mesh.neighbors)
+    O.check_conforming(P, T, mesh.segments, area=domain.area, rel=1e-9)
+    h = float(SizeField.from_domain(domain, size=mesh_size(length * width / k)).cap)
+    asked = length * width / (math.sqrt(3) / 4 * h * h)
+    assert abs(len(T) / asked - 1) <= 0.05
+    m, n, a, b = rows_for(width, length, h)
+    u = (corners[1] - corners[0]) / length
+    along = (P - corners[0]) @ u
+    across = (P - corners[0]) @ np.array([-u[1], u[0]])
+    nodes = []
+    for line in (0.0, width):  # one wall shifted half a piece, the other too if m is even
+        wall = np.sort(along[np.abs(across - line) <= 1e-9])
+        nodes.append(len(wall))
+        pieces = np.diff(wall)
+        middle = (wall[:-1] > 3 * a) & (wall[1:] < length - 3 * a)
+        assert np.allclose(pieces[middle], a, rtol=1e-9)
+    assert sorted(nodes) == ([n + 1, n + 2] if m % 2 else [n + 2, n + 2])
+    bulk = (along > 0.25 * length) & (along < 0.75 * length)
+    rows = across[bulk] / b
+    assert np.abs(rows - np.round(rows)).max() <= 0.05
+    q = np.array([_heron_ratio(P[t]) for t in T])
+    inner = bulk[T].all(axis=1)
+    assert inner.sum() >= 0.4 * len(T)
+    assert np.abs(q[inner] - isosceles_ratio(a, b)).max() <= 0.01
+    assert q.min() >= 0.8
+
+
+def mesh_size(max_area):
+    from bubblemesh.pipeline import _user_size
+
+    return _user_size(None, max_area)
