@@ -8,7 +8,10 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    length h), which makes the *refined boundary* §2.1 assumes; the walls
    of corners sharper than GRADE_ANGLE get nodes in geometric progression
    from the corner (:mod:`bubblemesh._wedges`), so the wedge fills with a
-   zigzag of similar triangles instead of slivers.
+   zigzag of similar triangles instead of slivers.  Where the longest walls
+   face each other across a straight channel (:mod:`bubblemesh._channel`),
+   they are cut for whole rows across it instead, and the frontal lattice is
+   laid in those rows.
 2. §2 (:func:`~bubblemesh.generation.generate_sized`): eq. 1-6 with every
    element bubble taken from the field (not eq. 3), so the interior follows
    the field: the boundary spacing growing inward at the gradation rate.  The
@@ -53,7 +56,9 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    (:func:`~bubblemesh.sizing.field_count`), then a higher mean with no lower
    minimum, means within MEAN_TIE ranked by their minimum): on small
    domains either insertion can win by where its seams fall, and where walls
-   dominate the seeds' first row can overshoot the field's count.
+   dominate the seeds' first row can overshoot the field's count.  A
+   channel's mesh of at most CHANNEL_BOTH_BELOW elements is made again on the
+   plain walls, and kept only if better the same way.
 5. Corners sharper than :data:`SHARP_ANGLE` (where no triangle can reach a
    radius ratio of 0.7) are reported: a :class:`QualityWarning` and the
    ``warnings`` field of the returned mesh's generation record.
@@ -134,6 +139,7 @@ BALANCE_SHARE = 0.05  # nor when the count is further off than this share of the
 BALANCE_BELOW = 20_000  # and only in meshes this small (in larger, 32 nodes are < 0.4%)
 FINE_WALL = 0.8  # the balance takes nodes last from the first row of walls finer than this
 BOTH_BELOW, BOTH_COUNT = 5000, 0.03  # both insertions up to this many elements (auto)
+CHANNEL_BOTH_BELOW = 200_000  # a channel's walls and the plain ones both up to this many
 OTHERS = ((True, True), (False, False))  # the other (frontal, seeded) meshes tried then
 FINAL_SWEEPS, FINAL_BELOW = 10, 20_000  # the last mean polish: sweeps, largest mesh
 MINMAX_ROUNDS = 16  # worst patches moved jointly (_minmax)
@@ -298,15 +304,25 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
                    momentum=float(momentum), rings=int(rings),
                    smoothing_rounds=smoothing_rounds,
                    smoothing_sweeps=int(smoothing_sweeps))
-    mesh = _mesh_with(domain, fine, field, frontal, True, notes, max_area, progress, clock,
-                      options, channel)
-    if insertion == "auto" and not frontal and len(mesh.triangles) <= BOTH_BELOW:
-        asked = field_count(field, mesh.points, mesh.triangles)
-        for other_frontal, seeded in OTHERS:
-            other = _mesh_with(domain, fine, field, other_frontal, seeded, notes, max_area,
-                               progress, clock, options, channel)
-            if _better(other, mesh, asked):
-                mesh = other
+    def portfolio(fine, channel):
+        mesh = _mesh_with(domain, fine, field, frontal, True, notes, max_area, progress, clock,
+                          options, channel)
+        if insertion == "auto" and not frontal and len(mesh.triangles) <= BOTH_BELOW:
+            asked = field_count(field, mesh.points, mesh.triangles)
+            for other_frontal, seeded in OTHERS:
+                other = _mesh_with(domain, fine, field, other_frontal, seeded, notes, max_area,
+                                   progress, clock, options, channel)
+                if _better(other, mesh, asked):
+                    mesh = other
+        return mesh
+
+    mesh = portfolio(fine, channel)
+    if channel is not None and insertion == "auto" and len(mesh.triangles) <= CHANNEL_BOTH_BELOW:
+        # where the plain walls' rows nearly fit, their lattice's one seam costs less
+        # than stretching every row, and a short channel's corners weigh more: both tried
+        plain = portfolio(refined_domain(domain, field), None)
+        if not _better(mesh, plain, field_count(field, plain.points, plain.triangles)):
+            mesh = plain
     return _polished(_minmaxed(mesh, max_area), max_area)
 
 

@@ -161,7 +161,9 @@ def test_bad_splits_are_value_errors(bad):
 @pytest.mark.parametrize("k", [70, 100, 200, 300, 500, 1000])
 @pytest.mark.parametrize("angle", [0.0, 0.7])
 def test_a_strip_is_meshed_in_whole_rows(k, angle):
-    """A 10 x 0.5 strip at max_area = area / k, turned by ``angle``: a valid,
+    """A 10 x 0.5 strip at max_area = area / k, turned by ``angle``, by
+    frontal insertion (its lattice in the channel's rows; ``auto`` may keep
+    the plain walls' mesh, the next test): a valid,
     conforming mesh within 5% of the field's count; its long walls cut
     into the n pieces of the m rows (:func:`rows_for`); in the middle half
     of the strip its nodes lie within 5% of a row's height of the m + 1
@@ -170,7 +172,7 @@ def test_a_strip_is_meshed_in_whole_rows(k, angle):
     length, width = 10.0, 0.5
     corners = _rectangle(length, width, angle, np.array([1.0, 2.0]))
     domain = bm.Domain.from_loops([corners])
-    mesh = bm.mesh(domain, max_area=length * width / k)
+    mesh = bm.mesh(domain, max_area=length * width / k, insertion="frontal")
     P, T = mesh.points, mesh.triangles
     O.check_valid(P, T, mesh.neighbors)
     O.check_conforming(P, T, mesh.segments, area=domain.area, rel=1e-9)
@@ -203,3 +205,31 @@ def mesh_size(max_area):
     from bubblemesh.pipeline import _user_size
 
     return _user_size(None, max_area)
+
+
+@pytest.mark.parametrize("k", [100, 300, 1000])
+def test_auto_keeps_the_plain_walls_mesh_unless_the_channels_is_better(k, monkeypatch):
+    """With ``insertion="auto"`` a channel's mesh is made on the plain walls
+    too: the result is one of the two bit for bit, and the channel's only
+    where its mean is higher (by more than a tie) with no lower minimum
+    (or an equal mean and a higher minimum), or it has fewer elements
+    below 0.7."""
+    import bubblemesh.pipeline as pipeline
+
+    domain = bm.Domain.from_loops([_rectangle(10.0, 0.5, 0.0, np.array([0.0, 0.0]))])
+    kwargs = dict(max_area=5.0 / k)
+    got = bm.mesh(domain, **kwargs)
+    monkeypatch.setattr(pipeline, "CHANNEL_BOTH_BELOW", 0)
+    channel = bm.mesh(domain, **kwargs)
+    monkeypatch.setattr(pipeline, "straight_channel", lambda *args: None)
+    plain = bm.mesh(domain, **kwargs)
+    assert len(channel.points) != len(plain.points) or not np.array_equal(channel.points,
+                                                                          plain.points)
+    same = [np.array_equal(got.points, m.points) and np.array_equal(got.triangles, m.triangles)
+            for m in (channel, plain)]
+    assert any(same)
+    if same[0] and not same[1]:
+        qc = np.array([_heron_ratio(channel.points[t]) for t in channel.triangles])
+        qp = np.array([_heron_ratio(plain.points[t]) for t in plain.triangles])
+        assert ((qc < 0.7).sum() < (qp < 0.7).sum() or qc.mean() > qp.mean() - 1e-4
+                or qc.min() > qp.min() - 1e-6)
