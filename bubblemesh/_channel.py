@@ -6,12 +6,16 @@ spacing h then meets the far wall in a squashed row, and the count of whole
 rows can lie several percent off the field's count.  Where the domain's
 longest walls face each other across such a strip, :func:`straight_channel`
 takes m whole rows of height b = W / m and cuts both walls into pieces of
-a = sqrt(3) h^2 / (2 b): a triangle of base a and height b has the area of
-the field's equilateral one, so the count stays the field's, and m is the
-whole number whose triangle has the better radius ratio (eq. 10).  The
-lattice of :mod:`bubblemesh._lattice` is then laid in rows of height b from
-one wall's nodes to the other's (shifted half a piece when m is odd), and
-the walls across the strip's ends get one node per row.
+about a = sqrt(3) h^2 / (2 b): a triangle of base a and height b has the
+area of the field's equilateral one, so the count stays near the field's;
+m and the pieces are the whole numbers whose triangle has the best radius
+ratio (eq. 10).  The lattice of :mod:`bubblemesh._lattice` is then laid in
+rows of height b from one wall's nodes to the other's: the first wall's
+nodes shifted half a piece (the two pieces at each end take up the half
+pieces, which would leave a right triangle in the corners), the far wall's
+too when m is even; the walls across the strip's ends get one node per
+row.  The default mesher keeps that mesh only where it beats the plain
+walls' (``bubblemesh.pipeline``).
 """
 
 from __future__ import annotations
@@ -159,10 +163,10 @@ def _uniform(size, wall, far, h):
 
 
 def _shifted(n):
-    """Parameters of n pieces shifted half a piece, on the lattice's odd rows:
-    the half pieces at the ends would leave a right triangle of legs a / 2
-    and b in the corners, so the CORNER_SPAN pieces from each end take them
-    up."""
+    """Parameters of n pieces shifted half a piece (on the rows of a lattice
+    whose origin is half a piece in): the half pieces at the ends would
+    leave a right triangle of legs a / 2 and b in the corners, so the
+    CORNER_SPAN pieces from each end take them up."""
     inner = (np.arange(CORNER_SPAN, n - CORNER_SPAN) + 0.5) / n
     tail = (CORNER_SPAN + 0.5) / n * np.arange(1, CORNER_SPAN + 1) / (CORNER_SPAN + 1)
     if len(inner) < 2:
@@ -171,9 +175,10 @@ def _shifted(n):
 
 
 def _splits(S, k, far, m, n):
-    """Both walls in n pieces (the far wall's nodes half a piece over when m
-    is odd, on the lattice's row m), and the segments joining their ends,
-    if any, in m."""
+    """The wall's nodes shifted half a piece (:func:`_shifted`, on row 0 of
+    the lattice whose origin is half a piece in), the far wall's on row m:
+    n equal pieces when m is odd, shifted too when m is even; the segments
+    joining their ends, if any, in m."""
     i = np.arange(1, n)
     splits = {(int(S[k, 0]), int(S[k, 1])): _shifted(n),
               (int(S[far, 0]), int(S[far, 1])): i / n if m % 2 else _shifted(n)}
