@@ -585,11 +585,15 @@ def test_a_rerun_by_changed_code_recomputes_and_replaces_the_old_rows(cases_dir,
 
 
 def test_the_shape_sweep_builds_valid_domains_of_the_stated_areas():
-    """Every shape of the user-input sweep is a valid Domain whose area is
-    GEOS's for the same rings (outer minus holes)."""
+    """Every shape of the user-input sweep (and of the rectangles) is a
+    valid Domain whose area is GEOS's for the same rings (outer minus
+    holes)."""
     shapely = pytest.importorskip("shapely.geometry")
-    from bubblemesh.studies.shapes import shapes
+    from bubblemesh.studies.shapes import rectangles, shapes
 
+    for name, loops in rectangles():
+        domain = bm.Domain.from_loops(loops)
+        assert domain.area == pytest.approx(shapely.Polygon(loops[0]).area, rel=1e-12), name
     names = []
     for name, loops in shapes():
         domain = bm.Domain.from_loops(loops)

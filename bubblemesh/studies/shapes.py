@@ -3,6 +3,10 @@ polygons), each meshed by bm.mesh at several sizes against Gmsh
 Frontal-Delaunay and Triangle -pq30 at matched counts.
 
     python -m bubblemesh.studies.shapes [--sizes 50 100 200 1000] [--out DIR]
+    python -m bubblemesh.studies.shapes --set rectangles --sizes 60 150 400 1200
+
+``--set rectangles`` sweeps long rectangles (channels 4 to 30 times longer
+than wide) instead of the shapes.
 
 Every shape is meshed with max_area = area / k for each k of ``--sizes``; the
 rows are :func:`bubblemesh.studies.quality.case_rows` (Gmsh on bm's refined
@@ -85,15 +89,27 @@ def shapes():
     yield "gear, corners only", [geometry.gear(12, 1.0, 1.2, 10.0)]
 
 
-def sweep(sizes=SIZES, out_dir=None, names=None):
-    """bm.mesh, Gmsh and Triangle on every shape of :func:`shapes` at
+def rectangles():
+    """(name, loops): rectangles 4 to 30 times longer than wide, the
+    channels of :mod:`bubblemesh._channel`."""
+    for length, width in ((4, 1), (6, 1), (8, 1), (20, 1), (10, 0.3), (30, 1), (5, 0.7)):
+        yield f"rectangle {length}x{width}", [np.array([(0, 0), (length, 0), (length, width),
+                                                        (0, width)], float)]
+
+
+SETS = {"shapes": shapes, "rectangles": rectangles}
+
+
+def sweep(sizes=SIZES, out_dir=None, names=None, which="shapes"):
+    """bm.mesh, Gmsh and Triangle on every shape of :func:`shapes` (or of
+    another of SETS, ``which``) at
     max_area = area / k for k in ``sizes``: the table (a DataFrame, one row
     per shape, size and mesher, case named "<shape> /k"), the pairs bm misses
-    a target on printed, written as shapes_vs_gmsh.csv to ``out_dir``."""
+    a target on printed, written as <which>_vs_gmsh.csv to ``out_dir``."""
     import pandas as pd
 
     rows = []
-    for name, loops in shapes():
+    for name, loops in SETS[which]():
         if names and name not in names:
             continue
         domain = bm.Domain.from_loops(loops)
@@ -111,7 +127,7 @@ def sweep(sizes=SIZES, out_dir=None, names=None):
             print(f"  misses {target}: {case}")
     if out_dir is not None:
         out_dir.mkdir(parents=True, exist_ok=True)
-        table.to_csv(out_dir / "shapes_vs_gmsh.csv", index=False)
+        table.to_csv(out_dir / f"{which}_vs_gmsh.csv", index=False)
     return table
 
 
@@ -120,9 +136,12 @@ def main():
     parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES),
                         help="mesh each shape with max_area = area / k for each k")
     parser.add_argument("--only", nargs="+", default=None, help="only these shapes")
-    parser.add_argument("--out", type=Path, default=None, help="write shapes_vs_gmsh.csv here")
+    parser.add_argument("--set", choices=sorted(SETS), default="shapes", dest="which",
+                        help="the shapes a user would bring, or long rectangles")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="write shapes_vs_gmsh.csv (rectangles_vs_gmsh.csv) here")
     args = parser.parse_args()
-    sweep(args.sizes, args.out, args.only)
+    sweep(args.sizes, args.out, args.only, args.which)
 
 
 if __name__ == "__main__":
