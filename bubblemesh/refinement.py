@@ -217,17 +217,23 @@ def _with_splits(graded, node_a, node_b, splits, given):
         raise ValueError("splits needs a Domain: they name its segments by their nodes")
     fixed_seg, fixed_t, lo, hi = graded
     lo, hi = lo.copy(), hi.copy()
-    index = {(int(i), int(j)): k for k, (i, j) in enumerate(zip(node_a, node_b))}
     segs, ts = [fixed_seg], [fixed_t]
     for key, t in splits.items():
-        k = index.get((int(key[0]), int(key[1])))
-        t = np.asarray(t, dtype=np.float64).reshape(-1)
-        if k is None:
-            raise ValueError(f"splits: ({key[0]}, {key[1]}) is not a segment of the domain")
+        try:
+            i, j = (int(v) for v in key)
+        except (TypeError, ValueError):
+            raise ValueError(f"splits: a key must be a pair of node indices, got {key!r}") from None
+        hit = np.flatnonzero((node_a == i) & (node_b == j))
+        try:
+            t = np.asarray(t, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError):
+            t = np.array([np.nan])  # refused below
+        if not len(hit):
+            raise ValueError(f"splits: ({i}, {j}) is not a segment of the domain")
         if not (np.all(np.isfinite(t)) and np.all(t > 0) and np.all(t < 1)
                 and np.all(np.diff(t) > 0)):
-            raise ValueError(f"splits: the parameters of ({key[0]}, {key[1]}) must increase "
-                             "within (0, 1)")
+            raise ValueError(f"splits: the parameters of ({i}, {j}) must increase within (0, 1)")
+        k = int(hit[0])
         if lo[k] > 0 or hi[k] < 1:  # graded toward a sharp corner: the grading wins
             continue
         segs.append(np.full(len(t), k, np.int64))

@@ -151,7 +151,9 @@ def _pieces_on(refined, P, i, j):
 
 
 @pytest.mark.parametrize("bad", [{(0, 2): [0.5]}, {(0, 1): [0.5, 0.4]}, {(0, 1): [0.0, 0.5]},
-                                 {(0, 1): [float("nan")]}, {(0, 1): [1.0]}])
+                                 {(0, 1): [float("nan")]}, {(0, 1): [1.0]}, {(0, 1): None},
+                                 {(0, 1): ["x"]}, {"ab": [0.5]}, {(0,): [0.5]},
+                                 {(0, 1, 2): [0.5]}])
 def test_bad_splits_are_value_errors(bad):
     domain = bm.Domain.from_loops([np.array([(0, 0), (4, 0), (4, 3), (0, 3)], float)])
     with pytest.raises(ValueError, match="splits"):
