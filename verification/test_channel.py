@@ -209,29 +209,34 @@ def mesh_size(max_area):
     return _user_size(None, max_area)
 
 
-@pytest.mark.parametrize("k", [100, 300, 1000])
-def test_auto_keeps_the_plain_walls_mesh_unless_the_channels_is_better(k, monkeypatch):
+def test_auto_keeps_the_plain_walls_mesh_unless_the_channels_is_better(monkeypatch):
     """With ``insertion="auto"`` a channel's mesh is made on the plain walls
-    too: the result is one of the two bit for bit, and the channel's only
-    where its mean is higher (by more than a tie) with no lower minimum
-    (or an equal mean and a higher minimum), or it has fewer elements
-    below 0.7."""
+    too: the result is one of the two bit for bit, the channel's only where
+    it has fewer elements below 0.7, a mean higher by more than a tie or a
+    higher minimum; over the strip's sizes both are kept somewhere (the
+    choice is made, not fixed)."""
     import bubblemesh.pipeline as pipeline
 
     domain = bm.Domain.from_loops([_rectangle(10.0, 0.5, 0.0, np.array([0.0, 0.0]))])
-    kwargs = dict(max_area=5.0 / k)
-    got = bm.mesh(domain, **kwargs)
-    monkeypatch.setattr(pipeline, "CHANNEL_BOTH_BELOW", 0)
-    channel = bm.mesh(domain, **kwargs)
-    monkeypatch.setattr(pipeline, "straight_channel", lambda *args: None)
-    plain = bm.mesh(domain, **kwargs)
-    assert len(channel.points) != len(plain.points) or not np.array_equal(channel.points,
-                                                                          plain.points)
-    same = [np.array_equal(got.points, m.points) and np.array_equal(got.triangles, m.triangles)
-            for m in (channel, plain)]
-    assert any(same)
-    if same[0] and not same[1]:
-        qc = np.array([_heron_ratio(channel.points[t]) for t in channel.triangles])
-        qp = np.array([_heron_ratio(plain.points[t]) for t in plain.triangles])
-        assert ((qc < 0.7).sum() < (qp < 0.7).sum() or qc.mean() > qp.mean() - 1e-4
-                or qc.min() > qp.min() - 1e-6)
+    kept = []
+    for k in (100, 300, 1000):
+        kwargs = dict(max_area=5.0 / k)
+        with monkeypatch.context() as patch:
+            got = bm.mesh(domain, **kwargs)
+            patch.setattr(pipeline, "CHANNEL_BOTH_BELOW", 0)
+            channel = bm.mesh(domain, **kwargs)
+            patch.setattr(pipeline, "straight_channel", lambda *args: None)
+            plain = bm.mesh(domain, **kwargs)
+        assert len(channel.points) != len(plain.points) or not np.array_equal(channel.points,
+                                                                              plain.points)
+        same = [np.array_equal(got.points, m.points) and np.array_equal(got.triangles,
+                                                                        m.triangles)
+                for m in (channel, plain)]
+        assert any(same), k
+        kept.append(same[0])
+        if same[0]:
+            qc = np.array([_heron_ratio(channel.points[t]) for t in channel.triangles])
+            qp = np.array([_heron_ratio(plain.points[t]) for t in plain.triangles])
+            assert ((qc < 0.7).sum() < (qp < 0.7).sum() or qc.mean() > qp.mean() - 1e-4
+                    or qc.min() > qp.min() - 1e-6), k
+    assert any(kept) and not all(kept)
