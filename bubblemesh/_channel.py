@@ -31,11 +31,11 @@ TRIES = 8  # longest segments tried as a channel's wall
 PARALLEL = 1e-9  # walls this close to antiparallel (sine of the angle) face each other
 CLOSE = 1e-9  # extents and the strip's emptiness, to this share of the wall's length
 LEAST_RATIO = 0.97  # the stretched triangle's radius ratio must reach this
-LEAST_PIECES = 4  # and the walls hold at least this many pieces
 ASPECT = 4.0  # a channel's walls are at least this many times longer than it is wide
 SHARE = 0.5  # and it holds at least this share of the domain (the lattice's frame is one)
 FEWER = 0.96  # a wall's pieces at least this share of the field's count's
 CORNER_SPAN = 2  # pieces at each end of a shifted wall that take up its half pieces
+LEAST_PIECES = 2 * CORNER_SPAN + 2  # walls in fewer have no shifted piece between those
 
 
 @dataclass(frozen=True)
@@ -129,13 +129,15 @@ def _facing(P, S, d, lengths, k):
     cands = np.flatnonzero((np.abs(sine) <= PARALLEL) & (d[:, 0] * u[0] + d[:, 1] * u[1] < 0)
                            & (np.abs(along[S[:, 0]] - length) <= tol)
                            & (np.abs(along[S[:, 1]]) <= tol) & (off[S[:, 0]] > tol))
-    for j in cands[np.argsort(off[S[cands, 0]], kind="stable")][:1]:
-        width = float(off[S[j, 0]])
-        others = np.ones(len(S), bool)
-        others[[k, j]] = False
-        if not _crosses_box(along[S[others]], off[S[others]], length, width, tol):
-            return int(j), width
-    return None
+    if not len(cands):
+        return None
+    j = int(cands[np.argmin(off[S[cands, 0]])])  # the nearest: a farther one has it between
+    width = float(off[S[j, 0]])
+    others = np.ones(len(S), bool)
+    others[[k, j]] = False
+    if _crosses_box(along[S[others]], off[S[others]], length, width, tol):
+        return None
+    return j, width
 
 
 def _crosses_box(x, y, length, width, tol):
@@ -169,8 +171,6 @@ def _shifted(n):
     CORNER_SPAN pieces from each end take them up."""
     inner = (np.arange(CORNER_SPAN, n - CORNER_SPAN) + 0.5) / n
     tail = (CORNER_SPAN + 0.5) / n * np.arange(1, CORNER_SPAN + 1) / (CORNER_SPAN + 1)
-    if len(inner) < 2:
-        return np.arange(1, n) / n
     return np.concatenate([tail, inner, 1.0 - tail[::-1]])
 
 

@@ -5,9 +5,10 @@ lengths (Heron); the rows and pieces against a brute-force search over every
 whole-row choice; the channel found on rectangles in any position, and not
 where the walls are not a strip (a hole between them, shifted or tilted
 walls, a graded field); refine_boundary's splits at exactly the parameters
-asked; and bm.mesh on strips: a valid mesh within 5% of the field's count
-whose interior nodes lie on the m rows across it, the far wall's nodes on
-the lattice's row, at any rotation."""
+asked; and bm.mesh on strips, level and turned: a valid mesh within 5% of
+the field's count, its walls cut as planned, the nodes of its middle half
+on the m + 1 lines across it; with ``auto``, the plain walls' mesh kept
+unless the channel's is better."""
 
 from __future__ import annotations
 
@@ -103,7 +104,7 @@ def test_a_rectangle_is_a_channel_along_its_long_walls(length, width, degrees, s
     [np.array([(0, 0), (10, 0), (10.5, 1), (0.5, 1)], float)],
     # the far wall tilted: a trapezoid
     [np.array([(0, 0), (10, 0), (10, 1.02), (0, 1)], float)],
-    # a notch reaching into the strip from the far wall
+    # the far wall broken by a notch
     [np.array([(0, 0), (10, 0), (10, 1), (6, 1), (5, 0.5), (4, 1), (0, 1)], float)],
 ])
 def test_no_channel_where_the_walls_are_not_a_strip(loops):
