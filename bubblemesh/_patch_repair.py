@@ -56,6 +56,7 @@ POLISH_SWEEPS = 3
 INNER_DROP = 2e-3  # removals off the walls' first row may lower the mean by this in all
 CANDIDATES = 8  # nodes (triangles: a quarter) tried per round by balance_count
 MEAN_CANDIDATES = 24  # nodes tried per round when removals are ranked by the mean
+MEAN_INSERTS = 8  # triangles tried per round when insertions are ranked by the mean
 
 
 def repair_worst(X, T, segments, movable, limit, below, rounds, counts, halvings, steps):
@@ -92,9 +93,11 @@ def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings
     removal leaving the highest mesh mean (then the highest smallest ratio
     of its changed triangles) is kept, or without ``by_mean`` of CANDIDATES
     the other way round.
-    While the count is below, insert a point in the sparsest triangle (an
-    edge midpoint or its centroid), the variant with the highest smallest
-    ratio (then mesh mean) kept.  Either only if that ratio is not below
+    While the count is below, insert a point in one of the sparsest
+    triangles (an edge midpoint or its centroid): of the MEAN_INSERTS
+    sparsest the variant leaving the highest mesh mean (then the highest
+    smallest ratio) kept, or without ``by_mean`` of the CANDIDATES / 4
+    sparsest the other way round.  Either only if that ratio is not below
     the mesh's minimum (or ``floor``, where that is lower: removals may then
     lower the minimum down to it) and the area bounds hold.  ``size`` maps
     (k, 2) points to (k,) sizes; the rest and the result as
@@ -127,12 +130,13 @@ def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings
             return _best_of(X, T, q, ptr, idx, _removals(T, ptr, idx, crowd, count), free,
                             limit, walls, halvings, steps, low, lowest, by_mean)
         else:
-            order = np.lexsort((np.arange(m), -fill))[:CANDIDATES // 4]
+            order = np.lexsort((np.arange(m), -fill))[:MEAN_INSERTS if by_mean
+                                                       else CANDIDATES // 4]
             tries = [(T[t], [point], -1) for t in order for point in
                      [X[T[t]].mean(axis=0)] + [0.5 * (X[T[t, k]] + X[T[t, (k + 1) % 3]])
                                                for k in range(3)]]
         return _best_of(X, T, q, ptr, idx, tries, free, limit, walls, halvings, steps,
-                        low, None)
+                        low, None, by_mean)
 
     return _rounds(X, T, segments, movable, limit, rounds, pick)
 

@@ -860,8 +860,8 @@ def _repaired_once(mesh, max_area, field, by_mean):
     radius is half its mean edge (as the area bound's).  With ``by_mean``
     the first balance takes the nodes of the first row of walls finer than
     FINE_WALL times the field's size last (:func:`_fine_walls_first_row`)
-    and ranks its removals by the mesh mean they leave, else by their
-    smallest ratio (:func:`~bubblemesh._patch_repair.balance_count`); the
+    and ranks its removals and insertions by the mesh mean they leave,
+    else by their smallest ratio (:func:`~bubblemesh._patch_repair.balance_count`); the
     balance after the spare repair, whose floor keeps the minimum, always
     the first way.  Returns (mesh, whether the first balance ran)."""
     X, T = mesh.points, mesh.triangles

@@ -27,7 +27,9 @@ from test_relaxed_flips import _areas, _jittered, _lattice_patch
 import bubblemesh as bm
 from bubblemesh import pipeline
 from bubblemesh._patch_repair import (
+    CANDIDATES,
     MEAN_DROP,
+    MEAN_INSERTS,
     _apex,
     _retriangulate,
     balance_count,
@@ -325,14 +327,20 @@ def test_the_count_balance_takes_a_shielded_node_only_when_no_other_can_go():
 
 
 @pytest.mark.heavy
-@given(corner_domains(max_holes=2), st.sampled_from([0.3, 0.2]), st.integers(0, 2**32 - 1))
-def test_ranked_by_mean_a_removal_leaves_the_higher_mean(loops, size, seed):
-    """One removal from the same candidates, ranked by the mean they leave
-    and by their smallest ratio: the first leaves a mesh mean (reference
+@given(corner_domains(max_holes=2), st.sampled_from([0.3, 0.2]), st.sampled_from([-1, 1]),
+       st.integers(0, 2**32 - 1))
+def test_ranked_by_mean_a_removal_or_insertion_leaves_the_higher_mean(loops, size, sign,
+                                                                      seed):
+    """One removal (sign -1) or insertion (+1), ranked by the mean it leaves
+    and by its smallest ratio: the candidates of the first include the
+    second's (the same removals; the MEAN_INSERTS sparsest triangles against
+    the CANDIDATES / 4 sparsest), so the first leaves a mesh mean (reference
     formula) at least the second's."""
+    assert MEAN_INSERTS >= CANDIDATES // 4  # the premise
     m, X, tri, _ = _jittered(loops, size, seed)
     limit = np.full(len(tri), np.inf)
-    out = [_balance(X, tri, m.segments, m.n_boundary, limit, (0, len(tri) - 2),
+    counts = (0, len(tri) - 2) if sign < 0 else (len(tri) + 2, math.inf)
+    out = [_balance(X, tri, m.segments, m.n_boundary, limit, counts,
                     _uniform(size), rounds=1, by_mean=by_mean) for by_mean in (True, False)]
     if out[0][3] and out[1][3]:
         means = [O.radius_ratio_reference(Y, t).mean() for Y, t, _, _ in out]
