@@ -38,8 +38,11 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    (:mod:`bubblemesh._patch_repair`: a row one node short, as in a gap
    between a hole and a wall, has no good positions to move to); where the
    count window stops that, a node is in effect moved there from where the
-   mesh is most crowded.  In meshes of at most FINAL_BELOW elements, once
-   the mesh is chosen (step 4), the free nodes around the worst triangles
+   mesh is most crowded.  Once the mesh is chosen (step 4), in meshes of at
+   most BALANCE_BELOW elements, nodes are swapped while that raises the
+   mean: a point inserted where the mesh is sparsest, a node removed where
+   it is most crowded, the count unchanged (:func:`_swapped`).  In meshes of
+   at most FINAL_BELOW elements the free nodes around the worst triangles
    move together to lift their smallest ratio (:mod:`bubblemesh._minmax`:
    one node alone is often held there by its neighbours), then a last sweep
    of gradient steps on every free node's star mean (:func:`_polished`).
@@ -137,6 +140,8 @@ BALANCE_WINDOW = 0.03  # a count further off the field's gets nodes removed or i
 BALANCE_OPS = 32  # at most this many
 BALANCE_SHARE = 0.05  # nor when the count is further off than this share of the field's
 BALANCE_BELOW = 20_000  # and only in meshes this small (in larger, 32 nodes are < 0.4%)
+SWAP_ROUNDS = 6  # node swaps (a point inserted, then a node removed) on the chosen mesh
+SWAP_GAIN = 1e-5  # each kept only if the mesh mean rises by more than this
 FINE_WALL = 0.8  # the balance takes nodes last from the first row of walls finer than this
 BOTH_BELOW, BOTH_COUNT = 5000, 0.03  # both insertions up to this many elements (auto)
 CHANNEL_BOTH_BELOW = 200_000  # a channel's walls and the plain ones both up to this many
@@ -323,7 +328,7 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
         plain = portfolio(refined_domain(domain, field), None)
         if not _better(mesh, plain, field_count(field, plain.points, plain.triangles)):
             mesh = plain
-    return _polished(_minmaxed(mesh, max_area), max_area)
+    return _polished(_minmaxed(_swapped(mesh, max_area, field), max_area), max_area)
 
 
 def _better(a, b, asked):
@@ -925,6 +930,51 @@ def _repaired_once(mesh, max_area, field, by_mean):
                     min_ratio=_smallest_ratio(X, T))
     return replace(mesh, points=X, triangles=T, neighbors=N, radii=radii,
                    optimization=stats), off
+
+
+def _swapped(mesh, max_area, field):
+    """Node swaps on the chosen mesh, if it has at most BALANCE_BELOW
+    elements: a point inserted where the count balance would insert one,
+    then a node removed where it would remove one
+    (:func:`~bubblemesh._patch_repair.balance_count`, both ranked by the
+    mesh mean they leave, neither lowering the mesh's minimum, both within
+    the area bounds), the pair kept if the mesh mean rises by more than
+    SWAP_GAIN; SWAP_ROUNDS pairs at most, the first that does not pay
+    ends them.  A node moves, in effect, from where the mesh is crowded to
+    where it is sparse, the element count unchanged: the balance and the
+    repair change the count and stop once it is inside their window."""
+    X, T = mesh.points, mesh.triangles
+    if not SWAP_ROUNDS or len(T) > BALANCE_BELOW:
+        return mesh
+    segments = np.asarray(mesh.segments)
+    regions = getattr(mesh.domain, "regions", None)
+    N, old, swaps = mesh.neighbors, np.arange(len(X)), 0
+    for _ in range(SWAP_ROUNDS):
+        Y, U, M, kept = X, T, N, old
+        for counts in ((len(T) + 2, math.inf), (0, len(T))):  # one point in, one node out
+            movable = np.arange(len(Y)) >= mesh.n_boundary
+            movable[np.unique(segments)] = False
+            limit = triangle_limits(Y, U, M, regions, max_area) / (1.0 + AREA_MARGIN)
+            Y, U, now, taken = balance_count(Y, U, segments, movable, limit, counts, field, 1,
+                                             MEAN_HALVINGS, MEAN_STEPS)
+            if not taken:
+                break
+            kept = np.where(now >= 0, kept[np.maximum(now, 0)], -1)
+            M = _walled(U, neighbors_of(U), segments, len(Y))
+        else:
+            q, r = triangle_quality(X, T), triangle_quality(Y, U)
+            if (len(U) == len(T) and r.mean() > q.mean() + SWAP_GAIN
+                    and r.min() >= q.min()):
+                X, T, N, old, swaps = Y, U, M, kept, swaps + 1
+                continue
+        break
+    if not swaps:
+        return mesh
+    radii = np.where(old >= 0, np.asarray(mesh.radii)[np.maximum(old, 0)],
+                     _half_mean_edge(X, T))
+    stats = replace(mesh.optimization, repairs=mesh.optimization.repairs + 2 * swaps,
+                    min_ratio=_smallest_ratio(X, T))
+    return replace(mesh, points=X, triangles=T, neighbors=N, radii=radii, optimization=stats)
 
 
 def _fine_walls_first_row(X, T, segments, field):

@@ -7,7 +7,8 @@ one triangle high given nodes.
 The count balance before it: the count moved two triangles per node toward
 its window and never past it, the minimum never lowered, the most crowded
 node the one removed (off the walls' first row when none there can go: a
-gear's corners).
+gear's corners).  The node swaps after both: the count and the minimum kept,
+the mean up by the gain each swap must bring.
 
 Oracles: verification/oracles.py (exact orientation and conformity, the radius
 ratio from the classical formulas), numpy areas and valence counts."""
@@ -488,3 +489,53 @@ def test_an_apex_makes_an_equilateral_triangle_left_of_its_edge(a, b):
     for side in (np.hypot(*(top - a)), np.hypot(*(top - b))):
         assert math.isclose(side, length, rel_tol=1e-12)
     assert O.orient2d_sign(*a, *b, *top) > 0
+
+
+def _without_swaps(domain, max_area):
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(pipeline, "SWAP_ROUNDS", 0)
+        return bm.mesh(domain, max_area=max_area)
+
+
+@pytest.mark.heavy
+@given(corner_domains(max_holes=2), st.sampled_from([40, 120]))
+def test_node_swaps_keep_the_count_and_minimum_and_raise_the_mean(loops, k):
+    """pipeline._swapped on bm.mesh's result without it: the element count
+    unchanged, the smallest ratio (reference formula) not lower, the mean up
+    by more than SWAP_GAIN per swap kept, every area within max_area, the
+    mesh valid and conforming, its boundary nodes unmoved, radii for every
+    node, and the same bits on a second run."""
+    domain = bm.Domain.from_loops(loops)
+    max_area = domain.area / k
+    m = _without_swaps(domain, max_area)
+    field = SizeField.from_domain(domain, size=pipeline._user_size(None, max_area))
+    s = pipeline._swapped(m, max_area, field)
+    swaps = (s.optimization.repairs - m.optimization.repairs) // 2
+    assert (swaps == 0) == (s is m)
+    q0 = O.radius_ratio_reference(m.points, m.triangles)
+    q = O.radius_ratio_reference(s.points, s.triangles)
+    assert len(q) == len(q0) and q.min() >= q0.min() - 1e-12
+    assert q.mean() >= q0.mean() + swaps * pipeline.SWAP_GAIN - 1e-12
+    assert np.all(_areas(s.points, s.triangles) <= max_area * (1 + 1e-12))
+    O.check_valid(s.points, s.triangles, s.neighbors)
+    O.check_conforming(s.points, s.triangles, s.segments, area=domain.area, rel=1e-9)
+    np.testing.assert_array_equal(s.points[: m.n_boundary], m.points[: m.n_boundary])
+    assert len(s.radii) == len(s.points) and np.all(s.radii > 0)
+    again = pipeline._swapped(m, max_area, field)
+    np.testing.assert_array_equal(again.points, s.points)
+    np.testing.assert_array_equal(again.triangles, s.triangles)
+
+
+def test_node_swaps_find_a_crowded_node_to_move_in_a_hexagon():
+    """The premise of the swaps: in the regular hexagon at area/500 the mesh
+    without them has a node whose move (one point in, one node out) raises
+    the mean, and the count stays."""
+    hexagon = np.array([(math.cos(a), math.sin(a)) for a in np.arange(6) * math.pi / 3])
+    domain = bm.Domain.from_loops([hexagon])
+    m = _without_swaps(domain, domain.area / 500)
+    field = SizeField.from_domain(domain, size=pipeline._user_size(None, domain.area / 500))
+    s = pipeline._swapped(m, domain.area / 500, field)
+    assert s.optimization.repairs > m.optimization.repairs and len(s.triangles) == len(
+        m.triangles)
+    assert O.radius_ratio_reference(s.points, s.triangles).mean() > O.radius_ratio_reference(
+        m.points, m.triangles).mean()
