@@ -526,6 +526,7 @@ def test_node_swaps_keep_the_count_and_minimum_and_raise_the_mean(loops, k):
     np.testing.assert_array_equal(again.triangles, s.triangles)
 
 
+@pytest.mark.heavy
 def test_node_swaps_find_a_crowded_node_to_move_in_a_hexagon():
     """The premise of the swaps: in the regular hexagon at area/500 the mesh
     without them has a node whose move (one point in, one node out) raises
