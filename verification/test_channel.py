@@ -210,6 +210,7 @@ def mesh_size(max_area):
     return _user_size(None, max_area)
 
 
+@pytest.mark.heavy  # nine meshes of a long strip: four minutes as plain Python
 def test_auto_keeps_the_plain_walls_mesh_unless_the_channels_is_better(monkeypatch):
     """With ``insertion="auto"`` a channel's mesh is made on the plain walls
     too: the result is one of the two bit for bit, the channel's only where
