@@ -540,3 +540,37 @@ def test_node_swaps_find_a_crowded_node_to_move_in_a_hexagon():
         m.triangles)
     assert O.radius_ratio_reference(s.points, s.triangles).mean() > O.radius_ratio_reference(
         m.points, m.triangles).mean()
+
+
+def test_a_count_past_the_window_still_lets_the_repair_insert(monkeypatch):
+    """A mesh whose count is 4% over the field's, past REPAIR_WINDOW, where
+    no balance brings it back (BALANCE_BELOW 0 and REPAIR_REACH 20%: this
+    small mesh stands for a large one): the repair around the poor triangles
+    beside the hole close to a wall may still insert points, so the count rises, by at
+    most REPAIR_REACH of it and 4 REPAIR_OPS elements, and the smallest ratio
+    rises; the mesh stays valid and conforming.  Within the window alone
+    nothing could be inserted."""
+    outer = np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float)
+    hole = np.array([(0.3, 0.11), (0.7, 0.11), (0.7, 0.6), (0.3, 0.6)], float)
+    domain = bm.Domain.from_loops([outer, hole[::-1]])
+    monkeypatch.setattr(pipeline, "REPAIR_OPS", 0)
+    plain = bm.mesh(domain, size=0.08, insertion="centroid")
+    monkeypatch.setattr(pipeline, "REPAIR_OPS", 16)
+    monkeypatch.setattr(pipeline, "REPAIR_REACH", 0.2)
+    monkeypatch.setattr(pipeline, "BALANCE_BELOW", 0)
+    q0 = O.radius_ratio_reference(plain.points, plain.triangles)
+    assert q0.min() < pipeline.REPAIR_BELOW
+    for scale in np.linspace(1.0, 1.04, 81):  # a field a little coarser: the count 4% over it
+        field = SizeField.from_domain(domain, size=0.08 * scale)
+        asked = field_count(field, plain.points, plain.triangles)
+        if 1.04 <= len(q0) / asked <= 1.045:
+            break
+    assert 1.04 <= len(q0) / asked <= 1.045
+    repaired = pipeline._repaired(plain, None, field)
+    q = O.radius_ratio_reference(repaired.points, repaired.triangles)
+    reach = min(4 * pipeline.REPAIR_OPS, pipeline.REPAIR_REACH * len(q0))
+    assert len(q0) < len(q) <= len(q0) + reach
+    assert q.min() > q0.min()
+    O.check_valid(repaired.points, repaired.triangles, repaired.neighbors)
+    O.check_conforming(repaired.points, repaired.triangles, repaired.segments,
+                       area=domain.area, rel=1e-9)
