@@ -136,7 +136,8 @@ REPAIR_BELOW = 0.9  # patches around triangles below this ratio are re-triangula
 REPAIR_OPS = 16  # at most this many of them
 REPAIR_SPARE = 4  # or this many nodes past it, when a balance elsewhere then takes them back
 REPAIR_WINDOW = 0.035  # they keep the element count this close to the field's (or bring it closer)
-REPAIR_REACH = 0.01  # or this close to its own where no balance follows (_repair_counts)
+REPAIR_REACH = 0.01  # or, for triangles below POOR_RATIO, this close to its own (_repair_counts)
+POOR_RATIO = 0.7  # the ratio every element off a too-sharp corner should reach
 BALANCE_WINDOW = 0.03  # a count further off the field's gets nodes removed or inserted
 BALANCE_OPS = 32  # at most this many
 BALANCE_SHARE = 0.05  # nor when the count is further off than this share of the field's
@@ -855,11 +856,12 @@ def _repaired_once(mesh, max_area, field, by_mean):
     sparsest) without lowering its minimum.  Then the patches around the
     worst triangles are re-triangulated with one or two points inserted or a
     node removed where that raises their smallest ratio, the count within
-    REPAIR_WINDOW of the field's or brought closer to it (where no balance
-    follows, within REPAIR_REACH of its own: :func:`_repair_counts`); both
-    within the area bounds.  In meshes of at most BALANCE_BELOW elements the
-    repair then goes on with the count free to go REPAIR_SPARE nodes further (a node inserted
-    where a corner or a row lacks one), is balanced back into BALANCE_WINDOW
+    REPAIR_WINDOW of the field's or brought closer to it (first, for those
+    below POOR_RATIO where no balance follows, within REPAIR_REACH of its
+    own: :func:`_repair_counts`); both within the area bounds.  In meshes of
+    at most BALANCE_BELOW elements the repair then goes on with the count
+    free to go REPAIR_SPARE nodes further (a node inserted where a corner or
+    a row lacks one), is balanced back into BALANCE_WINDOW
     by removals where the mesh is most crowded that keep the smallest ratio
     above the plain repair's, and is kept if it ends better
     (:func:`_spare_kept`): a node moved, in effect, from where the field has
@@ -906,7 +908,10 @@ def _repaired_once(mesh, max_area, field, by_mean):
             MEAN_STEPS, None, shielded, by_mean)
     if poor:
         before = len(T)
-        run(repair_worst, REPAIR_BELOW, REPAIR_OPS, _repair_counts(len(T), asked), MEAN_HALVINGS,
+        if triangle_quality(X, T).min(initial=1.0) < POOR_RATIO:
+            run(repair_worst, POOR_RATIO, REPAIR_OPS, _repair_counts(len(T), asked),
+                MEAN_HALVINGS, MEAN_STEPS)
+        run(repair_worst, REPAIR_BELOW, REPAIR_OPS, window(REPAIR_WINDOW), MEAN_HALVINGS,
             MEAN_STEPS)
         low, high = window(REPAIR_WINDOW)
         blocked = not low + 2 <= len(T) <= high - 4  # two points add four triangles
@@ -935,12 +940,13 @@ def _repaired_once(mesh, max_area, field, by_mean):
 
 
 def _repair_counts(count, asked):
-    """The element counts the repair may leave: within REPAIR_WINDOW of the
-    ``asked`` count; where no balance brings the count back (a mesh of more
-    than BALANCE_BELOW elements, or a count already outside that window)
-    also within REPAIR_REACH of its own ``count``, at most 4 REPAIR_OPS
-    elements (two points add four triangles).  Else a count past the window
-    forbids every insertion, and a narrow gap keeps its triangles below 0.7."""
+    """The element counts the repair of triangles below POOR_RATIO may leave:
+    within REPAIR_WINDOW of the ``asked`` count; where no balance brings the
+    count back (a mesh of more than BALANCE_BELOW elements, or a count
+    already outside that window) also within REPAIR_REACH of its own
+    ``count``, at most 4 REPAIR_OPS elements (two points add four
+    triangles).  Else a count past the window forbids every insertion, and a
+    narrow gap keeps its triangles below 0.7."""
     low, high = asked * (1.0 - REPAIR_WINDOW), asked * (1.0 + REPAIR_WINDOW)
     if count <= BALANCE_BELOW and low <= count <= high:
         return low, high

@@ -544,9 +544,10 @@ def test_node_swaps_find_a_crowded_node_to_move_in_a_hexagon():
 
 def test_a_count_past_the_window_still_lets_the_repair_insert(monkeypatch):
     """A mesh whose count is 4% over the field's, past REPAIR_WINDOW, where
-    no balance brings it back (BALANCE_BELOW 0 and REPAIR_REACH 20%: this
-    small mesh stands for a large one): the repair around the poor triangles
-    beside the hole close to a wall may still insert points, so the count rises, by at
+    no balance brings it back (BALANCE_BELOW 0, REPAIR_REACH 20% and
+    POOR_RATIO at REPAIR_BELOW: this small mesh stands for a large one with
+    triangles below 0.7): the repair around the poor triangles beside the
+    hole close to a wall may still insert points, so the count rises, by at
     most REPAIR_REACH of it and 4 REPAIR_OPS elements, and the smallest ratio
     rises; the mesh stays valid and conforming.  Within the window alone
     nothing could be inserted."""
@@ -558,6 +559,7 @@ def test_a_count_past_the_window_still_lets_the_repair_insert(monkeypatch):
     monkeypatch.setattr(pipeline, "REPAIR_OPS", 16)
     monkeypatch.setattr(pipeline, "REPAIR_REACH", 0.2)
     monkeypatch.setattr(pipeline, "BALANCE_BELOW", 0)
+    monkeypatch.setattr(pipeline, "POOR_RATIO", pipeline.REPAIR_BELOW)
     q0 = O.radius_ratio_reference(plain.points, plain.triangles)
     assert q0.min() < pipeline.REPAIR_BELOW
     for scale in np.linspace(1.0, 1.04, 81):  # a field a little coarser: the count 4% over it
