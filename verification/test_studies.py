@@ -602,3 +602,41 @@ def test_the_shape_sweep_builds_valid_domains_of_the_stated_areas():
         assert domain.area == pytest.approx(expected.area, rel=1e-12), name
         names.append(name)
     assert len(set(names)) == len(names) == 20
+
+
+def test_the_families_draw_valid_domains_the_same_for_a_seed():
+    """Every family of the unseen-domain study draws valid Domains whose
+    area is GEOS's for the same rings (outer minus holes), with positive
+    sizes; the same seed draws the same nodes, another seed others."""
+    geometry = pytest.importorskip("shapely.geometry")
+    from bubblemesh.studies.families import FAMILIES
+
+    for family, draw in FAMILIES.items():
+        first, again, other = list(draw(3, 1)), list(draw(3, 1)), list(draw(3, 2))
+        assert len(first) == len(again) == len(other) == 3, family
+        for (name, domain, kwargs), (_, same, _), (_, different, _) in zip(first, again, other):
+            points = np.asarray(domain.points)
+            assert np.array_equal(points, same.points), name
+            assert points.shape != different.points.shape or not np.array_equal(
+                points, different.points), name
+            rings = [points[loop] for loop in domain.loops]
+            expected = geometry.Polygon(rings[0], rings[1:])
+            assert expected.is_valid, name
+            assert domain.area == pytest.approx(expected.area, rel=1e-9), name
+            size = kwargs.get("size", kwargs.get("max_area"))
+            assert np.all(size(points) > 0) if callable(size) else size > 0, name
+
+
+def test_a_family_sweep_writes_its_table(tmp_path):
+    """One narrow domain through the family sweep: bm, Gmsh and Triangle
+    rows with valid meshes, written as narrow_vs_gmsh.csv."""
+    pytest.importorskip("gmsh")
+    pytest.importorskip("triangle")
+    import pandas as pd
+
+    from bubblemesh.studies.families import sweep
+
+    table = sweep("narrow", 1, 5, tmp_path)
+    written = pd.read_csv(tmp_path / "narrow_vs_gmsh.csv")
+    assert list(written["mesher"]) == list(table["mesher"]) == ["bm", "gmsh", "triangle"]
+    assert written["valid"].all()

@@ -513,6 +513,32 @@ def target_verdicts(table):
             for target, ok in met.items()}
 
 
+def print_case(label, case):
+    """One line for a sweep's case: bm's count (over the predicted) and its
+    mean, min and elements below 0.7 off sharp corners against Gmsh's."""
+    ours, gmsh = case[0], case[1]
+    print(f"{label:34s} N {ours['N']:6d} ({ours['ratio']:.3f}) "
+          f"mean {ours['mean']:.4f} vs {gmsh['mean']:.4f}  min {ours['min']:.4f} vs "
+          f"{gmsh['min']:.4f}  <0.7 off-corner {ours['below_off_sharp']}", flush=True)
+
+
+def sweep_table(rows, out_dir=None, filename=None):
+    """The sweep's rows (:func:`case_rows`) as a DataFrame in the COLUMNS of
+    quality_vs_gmsh.csv, :func:`target_summary` and each missed target
+    printed, written as ``filename`` to ``out_dir`` when that is given."""
+    import pandas as pd
+
+    table = pd.DataFrame([{column: r[key] for column, key in COLUMNS.items()} for r in rows])
+    print(target_summary(table))
+    for target, (_, missed) in target_verdicts(table).items():
+        for case in missed:
+            print(f"  misses {target}: {case}")
+    if out_dir is not None:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        table.to_csv(out_dir / filename, index=False)
+    return table
+
+
 def target_summary(table) -> str:
     """One line: on how many cases bm meets each of :func:`target_verdicts`,
     naming the cases where it does not, and those not compared with Gmsh."""

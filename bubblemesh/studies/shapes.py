@@ -26,7 +26,7 @@ import numpy as np
 
 import bubblemesh as bm
 from bubblemesh.studies import geometry
-from bubblemesh.studies.quality import COLUMNS, case_rows, target_summary, target_verdicts
+from bubblemesh.studies.quality import case_rows, print_case, sweep_table
 
 SIZES = (50, 100, 200, 1000)
 
@@ -106,8 +106,6 @@ def sweep(sizes=SIZES, out_dir=None, names=None, which="shapes"):
     max_area = area / k for k in ``sizes``: the table (a DataFrame, one row
     per shape, size and mesher, case named "<shape> /k"), the pairs bm misses
     a target on printed, written as <which>_vs_gmsh.csv to ``out_dir``."""
-    import pandas as pd
-
     rows = []
     for name, loops in SETS[which]():
         if names and name not in names:
@@ -115,20 +113,9 @@ def sweep(sizes=SIZES, out_dir=None, names=None, which="shapes"):
         domain = bm.Domain.from_loops(loops)
         for k in sizes:
             case = case_rows(f"{name} /{k}", domain, {"max_area": domain.area / k})
-            ours, gmsh = case[0], case[1]
-            print(f"{name + ' /' + str(k):34s} N {ours['N']:6d} ({ours['ratio']:.3f}) "
-                  f"mean {ours['mean']:.4f} vs {gmsh['mean']:.4f}  min {ours['min']:.4f} vs "
-                  f"{gmsh['min']:.4f}  <0.7 off-corner {ours['below_off_sharp']}", flush=True)
+            print_case(f"{name} /{k}", case)
             rows += case
-    table = pd.DataFrame([{column: r[key] for column, key in COLUMNS.items()} for r in rows])
-    print(target_summary(table))
-    for target, (_, missed) in target_verdicts(table).items():
-        for case in missed:
-            print(f"  misses {target}: {case}")
-    if out_dir is not None:
-        out_dir.mkdir(parents=True, exist_ok=True)
-        table.to_csv(out_dir / f"{which}_vs_gmsh.csv", index=False)
-    return table
+    return sweep_table(rows, out_dir, f"{which}_vs_gmsh.csv")
 
 
 def main():
