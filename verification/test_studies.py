@@ -480,6 +480,26 @@ def test_the_count_prediction_against_closed_forms():
     assert radial.error <= 1e-4 * exact
 
 
+def test_a_count_prediction_that_needs_too_many_pieces_stops_with_an_error(monkeypatch):
+    """A field a millionth of the square's side everywhere asks for about
+    5e11 pieces: the prediction raises RuntimeError (naming the piece
+    limit, lowered here to keep the test quick) instead of filling memory,
+    and a sweep's case rows then carry no prediction and are not judged on
+    the count."""
+    pd = pytest.importorskip("pandas")
+    import bubblemesh.studies.quality as Q
+
+    monkeypatch.setattr(Q, "_MAX_PIECES", 20_000)
+    square = bm.Domain.from_loops([[(0, 0), (1, 0), (1, 1), (0, 1)]])
+    with pytest.raises(RuntimeError, match="20000 pieces"):
+        Q.predicted_count(square, lambda xy: np.full(len(xy), 1e-6))
+    table = pd.DataFrame([dict(case="c", mesher=m, mean=0.9, min=0.8, N=100, predicted=np.nan,
+                               **{"N/predicted": np.nan, "below_0.7_off_sharp": 0})
+                          for m in ("bm", "gmsh", "triangle")])
+    met, missed = Q.target_verdicts(table)["N within 5% of the predicted count"]
+    assert met == missed == []
+
+
 def test_poor_elements_are_excused_only_at_corners_too_sharp_for_0_7():
     """A 15-degree wedge (sharper than SHARP_ANGLE) cut into three triangles:
     the two at the apex are excused, the flat one at the far side is not; on a
