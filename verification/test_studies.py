@@ -500,6 +500,24 @@ def test_a_count_prediction_that_needs_too_many_pieces_stops_with_an_error(monke
     assert met == missed == []
 
 
+def test_a_prediction_within_tolerance_cuts_only_pieces_larger_than_the_field(monkeypatch):
+    """The ninth graded plate of seed 2 (shapely ring segments 0.004 long
+    beside sizes of 0.07-0.17): once the estimated error is within
+    tolerance, only pieces larger than the field are cut, so the prediction
+    ends within 300,000 pieces a round (cutting every piece once the
+    settled part's error alone exceeded half the tolerance went past
+    500,000 by round 15) and within its tolerance."""
+    pytest.importorskip("shapely")
+    import bubblemesh.studies.quality as Q
+    from bubblemesh.sizing import SizeField
+    from bubblemesh.studies.families import graded
+
+    monkeypatch.setattr(Q, "_MAX_PIECES", 300_000)
+    name, domain, kwargs = list(graded(9, 2))[8]
+    prediction = Q.predicted_count(domain, SizeField.from_domain(domain, size=kwargs["size"]))
+    assert prediction.error <= 1e-4 * prediction.count, name
+
+
 def test_poor_elements_are_excused_only_at_corners_too_sharp_for_0_7():
     """A 15-degree wedge (sharper than SHARP_ANGLE) cut into three triangles:
     the two at the apex are excused, the flat one at the far side is not; on a

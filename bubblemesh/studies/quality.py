@@ -253,7 +253,8 @@ def predicted_count(domain, size, tol=1e-4) -> CountPrediction:
         cut = longest > _PIECE_OVER_H * hmin
         if error <= tol * total and not cut.any():
             return CountPrediction(total, error, settled + 2 * len(pieces))
-        cut |= _largest_differences(difference, error - 0.5 * tol * total)
+        if error > tol * total:  # once within, more cuts by error only chase the settled part
+            cut |= _largest_differences(difference, error - 0.5 * tol * total)
         if 2 * int(cut.sum()) > _MAX_PIECES:
             raise RuntimeError(f"predicted_count: over {_MAX_PIECES} pieces to cut (estimate "
                                f"{total:.6g} +- {error:.3g})")
