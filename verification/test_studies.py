@@ -500,6 +500,7 @@ def test_a_count_prediction_that_needs_too_many_pieces_stops_with_an_error(monke
     assert met == missed == []
 
 
+@pytest.mark.heavy  # shapely plates sampled by kernels: minutes as plain Python
 def test_a_prediction_within_tolerance_cuts_only_pieces_larger_than_the_field(monkeypatch):
     """The ninth graded plate of seed 2 (shapely ring segments 0.004 long
     beside sizes of 0.07-0.17): once the estimated error is within
@@ -642,6 +643,7 @@ def test_the_shape_sweep_builds_valid_domains_of_the_stated_areas():
     assert len(set(names)) == len(names) == 20
 
 
+@pytest.mark.heavy  # shapely plates sampled by kernels: minutes as plain Python
 def test_the_families_draw_valid_domains_the_same_for_a_seed():
     """Every family of the unseen-domain study draws valid Domains whose
     area is GEOS's for the same rings (outer minus holes), with positive
