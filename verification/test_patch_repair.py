@@ -554,9 +554,10 @@ def test_a_count_past_the_window_still_lets_the_repair_insert(monkeypatch):
     outer = np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float)
     hole = np.array([(0.3, 0.11), (0.7, 0.11), (0.7, 0.6), (0.3, 0.6)], float)
     domain = bm.Domain.from_loops([outer, hole[::-1]])
+    ops = pipeline.REPAIR_OPS
     monkeypatch.setattr(pipeline, "REPAIR_OPS", 0)
     plain = bm.mesh(domain, size=0.08, insertion="centroid")
-    monkeypatch.setattr(pipeline, "REPAIR_OPS", 16)
+    monkeypatch.setattr(pipeline, "REPAIR_OPS", ops)
     monkeypatch.setattr(pipeline, "REPAIR_REACH", 0.2)
     monkeypatch.setattr(pipeline, "BALANCE_BELOW", 0)
     monkeypatch.setattr(pipeline, "POOR_RATIO", pipeline.REPAIR_BELOW)

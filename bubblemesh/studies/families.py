@@ -1,6 +1,6 @@
 """Random families of domains the tree's tables do not hold, each meshed by
-bm.mesh against Gmsh Frontal-Delaunay and Triangle -pq30 at matched counts
-(the issue's "further domains the team does not see", made reproducible).
+bm.mesh against Gmsh Frontal-Delaunay and Triangle -pq30 at matched counts:
+domains nobody tuned for, reproducible from a seed.
 
     python -m bubblemesh.studies.families --family plates --n 30 --seed 1 [--out DIR]
 

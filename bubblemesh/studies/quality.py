@@ -182,7 +182,7 @@ _RULE_WEIGHTS = np.array([9 / 40] + [(155 - _S15) / 1200] * 3 + [(155 + _S15) / 
 # points: the field's gradation g < 1 bounds how far h can dip between them.
 _PIECE_OVER_H = 1.0
 _MAX_ROUNDS = 400
-_MAX_PIECES = 2_000_000  # pieces cut in one round: the memory stays below a gigabyte
+_MAX_PIECES = 2_000_000  # pieces cut in one round: bounds a round's arrays
 
 
 @dataclass(frozen=True)
