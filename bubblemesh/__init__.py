@@ -56,7 +56,9 @@ def mesh(domain: Domain, *, size: Any = None, max_area: Any = None, gradation: f
     vectorised callable ``h(xy: (n, 2)) -> (n,)``; ``max_area``: largest
     triangle area (as the side of the equilateral triangle of that area,
     combined with ``size`` by min); ``gradation``: the size field's largest
-    slope.  Without either, the sizes follow the input spacing and feature
+    slope (where graded walls would fill with more than 4% over the field's
+    element count, the mesh is made on a slightly steeper one that asks for
+    that count).  Without either, the sizes follow the input spacing and feature
     size.  ``options`` go to :func:`bubblemesh.pipeline.robust_mesh`
     (``insertion``: "auto", "frontal" or "centroid", §2's insertion order;
     ``max_iterations``, ``tol``, ``amplification``, ``alpha``, ``momentum``,

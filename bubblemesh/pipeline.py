@@ -61,7 +61,12 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    domains either insertion can win by where its seams fall, and where walls
    dominate the seeds' first row can overshoot the field's count.  A
    channel's mesh of at most CHANNEL_BOTH_BELOW elements is made again on the
-   plain walls, and kept only if better the same way.
+   plain walls, and kept only if better the same way.  A mesh of at most
+   STEEPER_BELOW elements with more than COUNT_AIM over the field's count
+   (walls graded from fine arcs or holes fill with more elements than the
+   field's integral, the more the steeper they grade) is made again on the
+   gradation whose field asks for that much fewer (:func:`_steeper_gradation`),
+   and kept only if better the same way, judged against the asked field.
 5. Corners sharper than :data:`SHARP_ANGLE` (where no triangle can reach a
    radius ratio of 0.7) are reported: a :class:`QualityWarning` and the
    ``warnings`` field of the returned mesh's generation record.
@@ -152,6 +157,9 @@ FINAL_SWEEPS, FINAL_BELOW = 10, 20_000  # the last mean polish: sweeps, largest 
 MINMAX_ROUNDS = 16  # worst patches moved jointly (_minmax)
 FINAL_TRIES = 3  # runs of it, each holding the nodes of the triangles the last put over bounds
 COUNT_TOL = 0.05  # a count this close to the size field's fits it
+COUNT_AIM = 0.04  # a mesh further over it is made again on a steeper gradation
+STEEPER_BELOW = 200_000  # up to this many elements
+STEEPER_MAX, STEEPER_STEPS = 4.0, 12  # the gradation searched up to this factor, in steps
 MEAN_TIE = 1e-4  # means closer than this are a tie, broken by the minimum
 MIN_TIE = 1e-6  # minima closer than this are a tie (both at a sharp corner's bound)
 MIN_ENOUGH = 0.9  # a mesh whose minimum stays above this is ranked by its mean
@@ -291,26 +299,55 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
                              f"{1 if name == 'rings' else 0}{f' and <= {top}' if top else ''}, "
                              f"got {value!r}")
     clock = PhaseClock()
+    field, channel, fine = _sized(domain, size, max_area, gradation)
+    clock.lap("sizing")
+    notes = _sharp_corner_warnings(domain)
+    for note in notes:
+        warnings.warn(note, QualityWarning, stacklevel=3)
+    options = dict(max_iterations=max_iterations, tol=float(tol),
+                   amplification=float(amplification), alpha=float(alpha),
+                   momentum=float(momentum), rings=int(rings),
+                   smoothing_rounds=smoothing_rounds,
+                   smoothing_sweeps=int(smoothing_sweeps))
+    run = dict(insertion=insertion, notes=notes, max_area=max_area, progress=progress,
+               clock=clock, options=options)
+    mesh = _chosen(domain, field, channel, fine, **run)
+    steeper = _steeper_gradation(domain, size, max_area, field, mesh)
+    if steeper is not None:
+        other = _chosen(domain, *_sized(domain, size, max_area, steeper), **run)
+        if _better(other, mesh, field_count(field, mesh.points, mesh.triangles)):
+            mesh = other
+    return _polished(_minmaxed(_swapped(mesh, max_area, field), max_area), max_area)
+
+
+def _sized(domain, size, max_area, gradation):
+    """(size field, straight channel or None, refined domain): step 1."""
+    field = _plain_field(domain, size, max_area, gradation)
     try:
-        field = SizeField.from_domain(domain, size=_with_regions(domain,
-                                                                 _user_size(size, max_area)),
-                                      gradation=gradation)
         _check_scale(domain, field)
         channel = straight_channel(domain, field, float(field.cap))
         fine = refined_domain(domain, field, splits=None if channel is None else channel.splits)
         field = _with_wedges(domain, field)
     except (TypeError, ValueError) as error:
         raise type(error)(f"mesh: {error}") from None
-    clock.lap("sizing")
-    notes = _sharp_corner_warnings(domain)
-    for note in notes:
-        warnings.warn(note, QualityWarning, stacklevel=3)
+    return field, channel, fine
+
+
+def _plain_field(domain, size, max_area, gradation):
+    """The size field of step 1 before the sharp corners' wedges."""
+    try:
+        return SizeField.from_domain(domain, size=_with_regions(domain,
+                                                                _user_size(size, max_area)),
+                                     gradation=gradation)
+    except (TypeError, ValueError) as error:
+        raise type(error)(f"mesh: {error}") from None
+
+
+def _chosen(domain, field, channel, fine, insertion, notes, max_area, progress, clock,
+            options):
+    """The best of the meshes step 4 makes on one size field."""
     frontal = _frontal_wanted(insertion, domain, field)
-    options = dict(max_iterations=max_iterations, tol=float(tol),
-                   amplification=float(amplification), alpha=float(alpha),
-                   momentum=float(momentum), rings=int(rings),
-                   smoothing_rounds=smoothing_rounds,
-                   smoothing_sweeps=int(smoothing_sweeps))
+
     def portfolio(fine, channel):
         mesh = _mesh_with(domain, fine, field, frontal, True, notes, max_area, progress, clock,
                           options, channel)
@@ -330,7 +367,33 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
         plain = portfolio(refined_domain(domain, field), None)
         if not _better(mesh, plain, field_count(field, plain.points, plain.triangles)):
             mesh = plain
-    return _polished(_minmaxed(_swapped(mesh, max_area, field), max_area), max_area)
+    return mesh
+
+
+def _steeper_gradation(domain, size, max_area, field, mesh):
+    """The gradation on which to mesh again when ``mesh`` has more than
+    COUNT_AIM over the count ``field`` asks for (graded walls fill with more
+    elements than the field's integral, the more the steeper they grade):
+    the one whose field asks for that count shrunk by the same share, found
+    by bisection, or None (no gradation, a mesh above STEEPER_BELOW
+    elements, or one within COUNT_AIM)."""
+    count, g = len(mesh.triangles), field.gradation
+    asked = field_count(field, mesh.points, mesh.triangles)
+    if g <= 0.0 or count > STEEPER_BELOW or count <= (1.0 + COUNT_AIM) * asked:
+        return None
+    goal = asked * asked / count
+
+    def asks(gradation):
+        steeper = _with_wedges(domain, _plain_field(domain, size, max_area, gradation))
+        return field_count(steeper, mesh.points, mesh.triangles)
+
+    low, high = g, STEEPER_MAX * g
+    if asks(high) > goal:
+        return high
+    for _ in range(STEEPER_STEPS):
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if asks(middle) > goal else (low, middle)
+    return high
 
 
 def _better(a, b, asked):

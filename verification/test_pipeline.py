@@ -483,3 +483,59 @@ def test_the_portfolio_ranking_follows_its_rule():
     # beyond it, the higher mean with a minimum above MIN_ENOUGH still wins
     ahead = _Rated(*([0.99 + 6 * shift] * (n - 1) + [0.91]))
     assert better(ahead, higher_min, n) and not better(higher_min, ahead, n)
+
+
+def _plate_with_fine_holes():
+    """A 2 x 1 plate with two holes of radius 0.04 cut into 128 sides each
+    (0.002 long beside a size of 0.06): the field grades out of both."""
+    loops = [np.array([(0, 0), (2, 0), (2, 1), (0, 1)], float)]
+    t = 2 * np.pi * np.arange(128) / 128
+    for cx in (0.6, 1.4):
+        loops.append(np.column_stack([cx + 0.04 * np.cos(t), 0.5 + 0.04 * np.sin(t)])[::-1])
+    return bm.Domain.from_loops(loops)
+
+
+@pytest.mark.heavy
+def test_a_field_graded_off_fine_holes_gets_its_count(monkeypatch):
+    """Graded walls fill with more elements than the field's integral (here
+    6% more at the asked gradation); bm.mesh meshes again on a steeper one.
+    The count lands within COUNT_AIM of the field's (the quality study's
+    adaptive integral, at the asked gradation), the mesh is valid and
+    conforming with the input's nodes kept; without the second mesh the
+    count is past COUNT_AIM, the premise."""
+    from bubblemesh.studies import quality as Q
+
+    domain = _plate_with_fine_holes()
+    predicted = Q.predicted_count(domain, SizeField.from_domain(domain, size=0.06)).count
+    aim = pipeline.COUNT_AIM
+    m = bm.mesh(domain, size=0.06)
+    assert abs(len(m.triangles) / predicted - 1) <= aim
+    _valid_and_conforming(m, domain)
+    _keeps_input_nodes(m, domain)
+    monkeypatch.setattr(pipeline, "COUNT_AIM", math.inf)
+    plain = bm.mesh(domain, size=0.06)
+    assert len(plain.triangles) > (1 + aim) * predicted
+
+
+def test_the_steeper_gradation_asks_for_the_count_shrunk_by_the_excess():
+    """_steeper_gradation on a §2 mesh made for a size 15% finer than its field's:
+    the field at the gradation it returns asks (the midpoint count on that
+    mesh) for the field's count shrunk by the mesh's excess, to the
+    bisection's step; nothing for a mesh within COUNT_AIM of its field or
+    for a field without a gradation."""
+    from bubblemesh.sizing import field_count
+
+    domain = _plate_with_fine_holes()
+    finer = SizeField.from_domain(domain, size=0.06 / 1.15)
+    m = generate_sized(pipeline.refined_domain(domain, finer), finer)
+    field = SizeField.from_domain(domain, size=0.06)
+    asked = field_count(field, m.points, m.triangles)
+    assert len(m.triangles) > (1 + pipeline.COUNT_AIM) * asked  # the premise
+    g = pipeline._steeper_gradation(domain, 0.06, None, field, m)
+    assert g is not None and field.gradation < g < pipeline.STEEPER_MAX * field.gradation
+    steeper = SizeField.from_domain(domain, size=0.06, gradation=g)
+    goal = asked * asked / len(m.triangles)
+    assert abs(field_count(steeper, m.points, m.triangles) / goal - 1) < 1e-3
+    assert pipeline._steeper_gradation(domain, 0.06 / 1.15, None, finer, m) is None
+    flat = SizeField.from_domain(domain, size=0.06, gradation=0.0)
+    assert pipeline._steeper_gradation(domain, 0.06, None, flat, m) is None
