@@ -680,3 +680,34 @@ def test_a_family_sweep_writes_its_table(tmp_path):
     written = pd.read_csv(tmp_path / "narrow_vs_gmsh.csv")
     assert list(written["mesher"]) == list(table["mesher"]) == ["bm", "gmsh", "triangle"]
     assert written["valid"].all()
+
+
+def _square_with_a_crack_and_a_point():
+    """A unit square with a hole, a crack from (0.2, 0.2) to (0.45, 0.7) and a
+    free point at (0.75, 0.25): a PSLG a peer must keep."""
+    square = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    hole = [(0.6, 0.6), (0.8, 0.6), (0.8, 0.8), (0.6, 0.8)]
+    return bm.Domain.from_pslg(loops=[square, hole], constraints=[[(0.2, 0.2), (0.45, 0.7)]],
+                               points=[(0.75, 0.25)])
+
+
+def test_gmsh_keeps_a_pslgs_constraints_and_free_points():
+    """The quality study gives Gmsh bm's constraints and free points
+    (embedded), so their meshes are compared on the same input: Gmsh's
+    mesh passes the study's exact check (the crack a chain of its edges, the
+    point one of its nodes, the hole empty); bm's too; a mesh of the square
+    and hole without them fails it."""
+    pytest.importorskip("gmsh")
+    from bubblemesh.sizing import SizeField
+    from bubblemesh.studies import quality as Q
+
+    domain = _square_with_a_crack_and_a_point()
+    m = bm.mesh(domain, max_area=0.01)
+    field = SizeField.from_domain(domain, size=0.15)
+    points, triangles, _ = Q.run_gmsh(m, field, len(m.triangles))
+    assert Q.measure(domain, points, triangles)["valid"]
+    assert Q.measure(domain, m.points, m.triangles)["valid"]
+    square, hole = domain.loops[0], domain.loops[-1]
+    plain = bm.mesh(bm.Domain.from_loops([domain.points[square], domain.points[hole]]),
+                    max_area=0.01)
+    assert not Q.measure(domain, plain.points, plain.triangles)["valid"]

@@ -164,9 +164,42 @@ def measure(domain, points, triangles):
     poor = q < 0.7
     at_sharp = _sharp_corner_flags(domain, p)[t].any(axis=1)
     holes = domain.hole_points if len(domain.hole_points) else None
-    report = verify.check(p, t, domain.segments, domain.points, holes=holes, delaunay=False)
+    interior = np.asarray(domain.interior)
+    report = verify.check(p, t, domain.segments[~interior], domain.points, holes=holes,
+                          delaunay=False)
+    valid = report.ok and _constraints_kept(domain.points, domain.segments[interior], p, t)
     return dict(N=len(t), min=float(q.min()), mean=float(q.mean()), below=int(poor.sum()),
-                below_off_sharp=int((poor & ~at_sharp).sum()), valid=bool(report.ok))
+                below_off_sharp=int((poor & ~at_sharp).sum()), valid=bool(valid))
+
+
+SPLIT_TOL = 1e-12  # bubblemesh.verify.check's default
+
+
+def _constraints_kept(nodes, constraints, points, triangles):
+    """Is every interior constraint (a, b) of ``nodes`` a chain of mesh edges
+    from a to b through the mesh nodes on it (within SPLIT_TOL of its length,
+    as bubblemesh.verify takes a split segment: a node put on it rounds)?
+    bubblemesh.verify checks the boundary loops, and the free points as input
+    nodes; constraints have the domain on both sides."""
+    e = np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]],
+                                triangles[:, [2, 0]]]), axis=1)
+    edges = set(map(tuple, e.tolist()))
+    for a, b in np.asarray(constraints).tolist():
+        if a > b:
+            continue  # each constraint is listed both ways
+        pa, pb = nodes[a], nodes[b]
+        d = pb - pa
+        pad = SPLIT_TOL * float(np.abs(d).max())
+        lo, hi = np.minimum(pa, pb) - pad, np.maximum(pa, pb) + pad
+        near = np.flatnonzero(((points >= lo) & (points <= hi)).all(axis=1))
+        off = np.abs(d[0] * (points[near, 1] - pa[1]) - d[1] * (points[near, 0] - pa[0]))
+        on = sorted(near[off <= SPLIT_TOL * float(d @ d)].tolist(),
+                    key=lambda k: float(np.dot(points[k] - pa, d)))
+        if len(on) < 2 or (points[on[0]] != pa).any() or (points[on[-1]] != pb).any():
+            return False
+        if any((min(u, v), max(u, v)) not in edges for u, v in zip(on, on[1:])):
+            return False
+    return True
 
 
 # The element density of a size field: equilateral triangles of side h per area.
@@ -351,19 +384,11 @@ def _gmsh_once(mesh, size, scale, algorithm):
     callable h(xy)) times ``scale``."""
     import gmsh
 
-    P = np.asarray(mesh.domain.points)
     t0 = time.perf_counter()
     gmsh.initialize()
     gmsh.option.setNumber("General.Terminal", 0)
     gmsh.model.add("m")
-    loops = []
-    for ix in mesh.domain.loops:
-        tags = [gmsh.model.geo.addPoint(*P[i], 0.0) for i in ix]
-        lines = [gmsh.model.geo.addLine(tags[k], tags[(k + 1) % len(tags)])
-                 for k in range(len(tags))]
-        loops.append(gmsh.model.geo.addCurveLoop(lines))
-    gmsh.model.geo.addPlaneSurface(loops)
-    gmsh.model.geo.synchronize()
+    _gmsh_domain(gmsh, mesh.domain)
     for _, tag in gmsh.model.getEntities(1):
         gmsh.model.mesh.setTransfiniteCurve(tag, 2)  # keep the given boundary nodes
     if callable(size):
@@ -381,11 +406,76 @@ def _gmsh_once(mesh, size, scale, algorithm):
     _, _, conn = gmsh.model.mesh.getElements(2)
     gmsh.finalize()
     seconds = time.perf_counter() - t0
+    if not conn:
+        raise RuntimeError("Gmsh made no triangles on this domain")
     index = np.zeros(int(tags.max()) + 1, np.int64)
     index[tags.astype(np.int64)] = np.arange(len(tags))
     tri = index[np.asarray(conn[0], np.int64).reshape(-1, 3)]
     pts = xyz.reshape(-1, 3)[:, :2]
     return pts, tri, seconds
+
+
+def _gmsh_domain(gmsh, domain):
+    """``domain`` as Gmsh geometry: a plane surface bounded by the closed
+    chains of its boundary segments (the largest the outer one), its interior
+    constraints embedded as lines and its free points as points, so that
+    Gmsh keeps every node and segment bm keeps."""
+    P = np.asarray(domain.points)
+    segments = np.asarray(domain.segments)
+    interior = np.asarray(domain.interior)
+    points, lines = {}, {}
+
+    def point(i):
+        if i not in points:
+            points[i] = gmsh.model.geo.addPoint(*P[i], 0.0)
+        return points[i]
+
+    def line(a, b):  # the signed tag of the line a -> b, made a -> b if new
+        if (b, a) in lines:
+            return -lines[(b, a)]
+        if (a, b) not in lines:
+            lines[(a, b)] = gmsh.model.geo.addLine(point(a), point(b))
+        return lines[(a, b)]
+
+    loops = _cycles(segments[~interior])
+    outer = max(range(len(loops)), key=lambda k: abs(_ring_area(P[loops[k]])))
+    loops.insert(0, loops.pop(outer))  # the others keep the domain's order
+    curve_loops = [gmsh.model.geo.addCurveLoop([line(c[k], c[(k + 1) % len(c)])
+                                                for k in range(len(c))]) for c in loops]
+    surface = gmsh.model.geo.addPlaneSurface(curve_loops)
+    embedded = [line(int(a), int(b)) for a, b in segments[interior] if a < b]
+    free = np.setdiff1d(np.arange(len(P)), segments.ravel())
+    free_tags = [point(int(i)) for i in free]
+    gmsh.model.geo.synchronize()
+    if embedded:
+        gmsh.model.mesh.embed(1, [abs(t) for t in embedded], 2, surface)
+    if free_tags:
+        gmsh.model.mesh.embed(0, free_tags, 2, surface)
+
+
+def _cycles(segments):
+    """The closed chains of directed ``segments`` (each used once), as node lists."""
+    leaving = {}
+    for k, (a, _) in enumerate(segments.tolist()):
+        leaving.setdefault(a, []).append(k)
+    used = np.zeros(len(segments), bool)
+    cycles = []
+    for first in range(len(segments)):
+        if used[first]:
+            continue
+        chain, k = [], first
+        while not used[k]:
+            used[k] = True
+            a, b = segments[k]
+            chain.append(int(a))
+            k = next((j for j in leaving.get(int(b), ()) if not used[j]), first)
+        cycles.append(chain)
+    return cycles
+
+
+def _ring_area(ring):
+    x, y = ring[:, 0], ring[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
 
 
 def _winners(rows, key, best):
