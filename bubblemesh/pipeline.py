@@ -18,6 +18,9 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    initial triangulation holds frontal seeds (:mod:`bubblemesh._seeds`): the
    apexes of equilateral triangles on the boundary edges where they have room,
    and a node on the bisector of each corner that two triangles fit best.
+   Where eq. 6 is met while triangles still span the domain (fine walls
+   grading to a far larger size inside: the first needles' bubbles are the
+   inside's), §2 runs frontally instead (:func:`_stretched`).
 3. A stable §3: the eq. 7-8 overlap forces with the node bubbles anchored at
    their §2 radii (amplified, §3.1; eq. 9 is not applied, so radii cannot
    drift; the frontal seeds hold still like the boundary), each step plus
@@ -164,6 +167,7 @@ MEAN_TIE = 1e-4  # means closer than this are a tie, broken by the minimum
 MIN_TIE = 1e-6  # minima closer than this are a tie (both at a sharp corner's bound)
 MIN_ENOUGH = 0.9  # a mesh whose minimum stays above this is ranked by its mean
 UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
+STRETCHED = 6.0  # a §2 triangle this many sizes long was never refined (_stretched)
 FRONTAL_ELEMENTS = 1000  # frontal insertion from this many elements of the cap size up
 ITERATIONS = {"centroid": 200, "frontal": 30}  # §3 force iterations by default
 ROUNDS = {"centroid": 3, "frontal": 1}  # smoothing rounds by default (the front starts regular)
@@ -312,10 +316,11 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
     run = dict(insertion=insertion, notes=notes, max_area=max_area, progress=progress,
                clock=clock, options=options)
     mesh = _chosen(domain, field, channel, fine, **run)
+    asked = field_count(field, mesh.points, mesh.triangles)
     steeper = _steeper_gradation(domain, size, max_area, field, mesh)
     if steeper is not None:
         other = _chosen(domain, *_sized(domain, size, max_area, steeper), **run)
-        if _better(other, mesh, field_count(field, mesh.points, mesh.triangles)):
+        if _better(other, mesh, asked):
             mesh = other
     return _polished(_minmaxed(_swapped(mesh, max_area, field), max_area), max_area)
 
@@ -435,6 +440,9 @@ def _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, 
     except MemoryError:  # sizes far finer than the domain's extent
         raise MeshingError("mesh: not enough memory for the mesh this size field asks for "
                            "(sizes far finer than the domain)") from None
+    if not frontal and _stretched(generated, field):
+        return _mesh_with(domain, fine, field, True, True, notes, max_area, progress, clock,
+                          options, channel)
     gen = RobustGenerationStats(
         **{k: getattr(generated.generation, k) for k in GenerationStats.__dataclass_fields__},
         warnings=notes, input_boundary_nodes=len(domain.points),
@@ -463,6 +471,19 @@ def _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, 
     except MemoryError:  # sizes far finer than the domain's extent
         raise MeshingError("mesh: not enough memory to optimise the mesh this size field "
                            "asks for (sizes far finer than the domain)") from None
+
+
+def _stretched(generated, field):
+    """Did eq. 6 stop §2 on triangles that span the domain?  Where fine walls
+    grade the field up to a far larger size inside, the first triangulation's
+    needles between the walls have their centroids, and so their bubbles, where
+    the field is large: the bubbles' sum passes the domain's area before any
+    insertion.  True if some triangle's longest edge exceeds STRETCHED times
+    the field at its centroid; a finished §2 mesh stays well below."""
+    P, T = generated.points, generated.triangles
+    longest = np.max([np.hypot(*(P[T[:, (k + 1) % 3]] - P[T[:, k]]).T) for k in range(3)],
+                     axis=0)
+    return bool((longest > STRETCHED * field(P[T].mean(axis=1))).any())
 
 
 def refined_domain(domain, field, rounding="nearest", splits=None):
