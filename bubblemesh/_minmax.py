@@ -206,6 +206,8 @@ def _moved(X, T, q, free, tris, limit, lowest):
     the triangles' ratios, updated), else False (X unchanged)."""
     before = q[tris]
     floor = float(before.min())
+    if not floor > 0.0:  # a flat triangle: its ratio's gradient divides by its area
+        return False
     patch = _Patch(X, T, free, tris, limit)
     elsewhere = np.where(q <= floor + TIE, np.inf, q)  # the worst's ties are lifted in turn
     elsewhere[tris] = np.inf

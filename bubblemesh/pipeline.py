@@ -479,11 +479,20 @@ def _stretched(generated, field):
     needles between the walls have their centroids, and so their bubbles, where
     the field is large: the bubbles' sum passes the domain's area before any
     insertion.  True if some triangle's longest edge exceeds STRETCHED times
-    the field at its centroid; a finished §2 mesh stays well below."""
+    the field at its centroid (a finished §2 mesh stays well below) while
+    that centroid has room: it is more than half that size off every wall (a
+    domain thinner than its walls' pieces, a sliver, has no room to refine)."""
     P, T = generated.points, generated.triangles
     longest = np.max([np.hypot(*(P[T[:, (k + 1) % 3]] - P[T[:, k]]).T) for k in range(3)],
                      axis=0)
-    return bool((longest > STRETCHED * field(P[T].mean(axis=1))).any())
+    centres = P[T].mean(axis=1)
+    h = field(centres)
+    long = longest > STRETCHED * h
+    if not long.any():
+        return False
+    room = boundary_clearance(np.vstack([P, centres[long]]), np.asarray(generated.segments),
+                              len(P), float(h[long].max()))[len(P):]
+    return bool((room > 0.5 * h[long]).any())
 
 
 def refined_domain(domain, field, rounding="nearest", splits=None):
