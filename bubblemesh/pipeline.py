@@ -316,11 +316,10 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
     run = dict(insertion=insertion, notes=notes, max_area=max_area, progress=progress,
                clock=clock, options=options)
     mesh = _chosen(domain, field, channel, fine, **run)
-    asked = field_count(field, mesh.points, mesh.triangles)
     steeper = _steeper_gradation(domain, size, max_area, field, mesh)
     if steeper is not None:
         other = _chosen(domain, *_sized(domain, size, max_area, steeper), **run)
-        if _better(other, mesh, asked):
+        if _better(other, mesh, field_count(field, mesh.points, mesh.triangles)):
             mesh = other
     return _polished(_minmaxed(_swapped(mesh, max_area, field), max_area), max_area)
 
@@ -383,8 +382,10 @@ def _steeper_gradation(domain, size, max_area, field, mesh):
     by bisection, or None (no gradation, a mesh above STEEPER_BELOW
     elements, or one within COUNT_AIM)."""
     count, g = len(mesh.triangles), field.gradation
+    if g <= 0.0 or count > STEEPER_BELOW:
+        return None
     asked = field_count(field, mesh.points, mesh.triangles)
-    if g <= 0.0 or count > STEEPER_BELOW or count <= (1.0 + COUNT_AIM) * asked:
+    if not asked > 0.0 or count <= (1.0 + COUNT_AIM) * asked:
         return None
     goal = asked * asked / count
 
