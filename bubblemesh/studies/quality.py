@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 import bubblemesh as bm
+from bubblemesh.domain import _loop_areas
 from bubblemesh.quality import radius_ratio
 from bubblemesh.studies import geometry
 
@@ -438,7 +439,9 @@ def _gmsh_domain(gmsh, domain):
         return lines[(a, b)]
 
     loops = _cycles(segments[~interior])
-    outer = max(range(len(loops)), key=lambda k: abs(_ring_area(P[loops[k]])))
+    offsets = np.cumsum([0] + [len(c) for c in loops])
+    areas = _loop_areas(np.vstack([P[c] for c in loops]), offsets)
+    outer = int(np.argmax(areas))
     loops.insert(0, loops.pop(outer))  # the others keep the domain's order
     curve_loops = [gmsh.model.geo.addCurveLoop([line(c[k], c[(k + 1) % len(c)])
                                                 for k in range(len(c))]) for c in loops]
@@ -471,11 +474,6 @@ def _cycles(segments):
             k = next((j for j in leaving.get(int(b), ()) if not used[j]), first)
         cycles.append(chain)
     return cycles
-
-
-def _ring_area(ring):
-    x, y = ring[:, 0], ring[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
 
 
 def _winners(rows, key, best):
