@@ -658,6 +658,13 @@ def _forces(mesh, R, max_iterations, tol, alpha, rings, momentum, radius_of=None
     return X, iterations, float(largest), int(blocked), lists.builds
 
 
+def _free_points(n_b, segments):
+    """The boundary nodes on no segment (a planar graph's free points)."""
+    on = np.zeros(n_b, np.bool_)
+    on[np.asarray(segments, np.int64).ravel()] = True
+    return np.flatnonzero(~on)
+
+
 def _separate(X, P0):
     """Nodes that the forces moved onto another node's coordinates (far from
     the origin, where floats are coarse) go back to their distinct §2
@@ -806,7 +813,8 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
                     size_field=None, clock=None) -> Mesh:
     """Step 3 of the module docstring on a §2 mesh; the result's smallest eq. 10
     radius ratio is never below ``mesh``'s.  ``settle``: run :func:`_settle`
-    (sizes from ``size_field``, else from the §2 radii)."""
+    (sizes from ``size_field``, else from the §2 radii).  With ``size_field``
+    the free points' bubbles take its radius, not eq. 1-2's."""
     clock = clock or PhaseClock()
     n_b, n = mesh.n_boundary, len(mesh.points)
     segments = np.asarray(mesh.segments)
@@ -815,6 +823,11 @@ def stable_optimize(mesh, *, max_iterations=200, tol=1e-3, amplification=1.7, al
     R = np.asarray(mesh.radii, dtype=np.float64) * amplification
     radius_of = None if size_field is None else (
         lambda xy: amplification * size_field.radius(np.ascontiguousarray(xy)))
+    free = _free_points(n_b, segments)
+    if radius_of is not None and len(free):
+        # eq. 1-2 give a free point its distance to the nearest input node, a bubble
+        # that can span many sizes and push its neighbours into clumps and holes
+        R[free] = radius_of(P0[free])
     X, iterations, largest, blocked, builds = _forces(mesh, R, max_iterations, tol, alpha, rings,
                                                       momentum, radius_of)
     _separate(X, P0)

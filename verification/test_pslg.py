@@ -142,6 +142,27 @@ def test_crack_interface_and_free_points_are_kept():
         assert {tuple(p) for p in crack.tolist()} <= index
 
 
+def _ratios(P, T):
+    """Eq. 10 from side lengths: 2r/R = 16 K^2 / (a b c (a + b + c)), K by the cross product."""
+    a, b, c = (np.hypot(*(P[T[:, (k + 1) % 3]] - P[T[:, k]]).T) for k in range(3))
+    u, v = P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]]
+    area = 0.5 * np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])
+    return 16 * area**2 / (a * b * c * (a + b + c))
+
+
+def test_a_few_free_points_cost_the_mesh_little():
+    # a free point's eq. 1-2 bubble spans the distance to its nearest input node,
+    # here ten sizes: left in §3, it pushed the lattice around it into clumps and holes
+    square = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    free = [(0.3, 0.3), (0.7, 0.25), (0.5, 0.6), (0.2, 0.8), (0.8, 0.8)]
+    plain = bm.mesh(bm.Domain.from_pslg(loops=[square]), size=0.03)
+    dotted = bm.mesh(bm.Domain.from_pslg(loops=[square], points=free), size=0.03)
+    assert {tuple(p) for p in free} <= {tuple(p) for p in dotted.points.tolist()}
+    assert abs(len(dotted.triangles) / len(plain.triangles) - 1) < 0.03
+    mean_plain = _ratios(plain.points, plain.triangles).mean()
+    assert _ratios(dotted.points, dotted.triangles).mean() > mean_plain - 0.003
+
+
 def test_islands_in_holes_nest_by_parity():
     hole = np.array([(1, 1), (7, 1), (7, 7), (1, 7)], float)
     island = np.array([(2, 2), (6, 2), (6, 6), (2, 6)], float)
