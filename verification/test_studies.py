@@ -643,6 +643,29 @@ def test_the_shape_sweep_builds_valid_domains_of_the_stated_areas():
     assert len(set(names)) == len(names) == 20
 
 
+def test_triangles_example_set_reads_every_file_with_triangles_area():
+    """The triangle-examples set reads all 20 ``.poly`` files of the triangle
+    package as Domains whose area is that of Triangle's own triangulation of
+    the same file (-p, or -pc where its segments leave the convex hull
+    open, as in box.poly)."""
+    triangle = pytest.importorskip("triangle")
+    from bubblemesh.studies.shapes import triangle_examples
+
+    data = Path(triangle.__file__).parent / "data"
+    names = []
+    for name, domain in triangle_examples():
+        names.append(name)
+        given = triangle.load(str(data), name[:-len(".poly")])
+        theirs = triangle.triangulate(given, "p")
+        if "triangles" not in theirs:  # open: the hull closes it
+            theirs = triangle.triangulate(given, "pc")
+        P, T = theirs["vertices"], theirs["triangles"]
+        u, v = P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]]
+        area = 0.5 * np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]).sum()
+        assert domain.area == pytest.approx(area, rel=1e-12), name
+    assert len(set(names)) == len(names) == 20
+
+
 @pytest.mark.heavy  # shapely plates sampled by kernels: minutes as plain Python
 def test_the_families_draw_valid_domains_the_same_for_a_seed():
     """Every family of the unseen-domain study draws valid Domains whose

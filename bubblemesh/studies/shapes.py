@@ -4,9 +4,13 @@ Frontal-Delaunay and Triangle -pq30 at matched counts.
 
     python -m bubblemesh.studies.shapes [--sizes 50 100 200 1000] [--out DIR]
     python -m bubblemesh.studies.shapes --set rectangles --sizes 60 150 400 1200
+    python -m bubblemesh.studies.shapes --set triangle-examples --sizes 100 300 1000 3000
 
 ``--set rectangles`` sweeps long rectangles (channels 4 to 30 times longer
-than wide) instead of the shapes.
+than wide) instead of the shapes; ``--set triangle-examples`` the ``.poly``
+files that ship with the ``triangle`` package (Triangle's own examples:
+holes, interior constraints, free points, a lake with islands), read by
+:meth:`bubblemesh.Domain.from_poly`.
 
 Every shape is meshed with max_area = area / k for each k of ``--sizes``; the
 rows are :func:`bubblemesh.studies.quality.case_rows` (Gmsh on bm's refined
@@ -97,7 +101,16 @@ def rectangles():
                                                         (0, width)], float)]
 
 
-SETS = {"shapes": shapes, "rectangles": rectangles}
+def triangle_examples():
+    """(name, domain): every ``.poly`` file in the ``triangle`` package's
+    data directory, by name."""
+    import triangle  # a peer, as the sweep's Triangle rows
+
+    for path in sorted((Path(triangle.__file__).parent / "data").glob("*.poly")):
+        yield path.name, bm.Domain.from_poly(path)
+
+
+SETS = {"shapes": shapes, "rectangles": rectangles, "triangle-examples": triangle_examples}
 
 
 def sweep(sizes=SIZES, out_dir=None, names=None, which="shapes"):
@@ -107,10 +120,10 @@ def sweep(sizes=SIZES, out_dir=None, names=None, which="shapes"):
     per shape, size and mesher, case named "<shape> /k"), the pairs bm misses
     a target on printed, written as <which>_vs_gmsh.csv to ``out_dir``."""
     rows = []
-    for name, loops in SETS[which]():
+    for name, given in SETS[which]():
         if names and name not in names:
             continue
-        domain = bm.Domain.from_loops(loops)
+        domain = given if isinstance(given, bm.Domain) else bm.Domain.from_loops(given)
         for k in sizes:
             case = case_rows(f"{name} /{k}", domain, {"max_area": domain.area / k})
             print_case(f"{name} /{k}", case)
@@ -124,7 +137,8 @@ def main():
                         help="mesh each shape with max_area = area / k for each k")
     parser.add_argument("--only", nargs="+", default=None, help="only these shapes")
     parser.add_argument("--set", choices=sorted(SETS), default="shapes", dest="which",
-                        help="the shapes a user would bring, or long rectangles")
+                        help="the shapes a user would bring, long rectangles or "
+                        "Triangle's example files")
     parser.add_argument("--out", type=Path, default=None,
                         help="write shapes_vs_gmsh.csv (rectangles_vs_gmsh.csv) here")
     args = parser.parse_args()
