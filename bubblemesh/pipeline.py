@@ -164,8 +164,8 @@ COUNT_AIM = 0.04  # a mesh further over it is made again on a steeper gradation
 STEEPER_BELOW = 200_000  # up to this many elements
 STEEPER_MAX, STEEPER_STEPS = 4.0, 12  # the gradation searched up to this factor, in steps
 MEAN_TIE = 1e-4  # means closer than this are a tie, broken by the minimum
-MIN_TIE = 1e-6  # minima closer than this are a tie (both at a sharp corner's bound)
 MIN_ENOUGH = 0.9  # a mesh whose minimum stays above this is ranked by its mean
+MIN_TRADE, MIN_TRADE_MAX = 0.25, 0.005  # a mean gain may cost this share of it (at most)
 UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
 STRETCHED = 6.0  # a §2 triangle this many sizes long was never refined (_stretched)
 FRONTAL_ELEMENTS = 1000  # frontal insertion from this many elements of the cap size up
@@ -408,8 +408,10 @@ def _better(a, b, asked):
     field's) where b's is not; or both or neither within it, a's count within
     BOTH_COUNT of b's (quality is not bought with elements; below it too
     where both are within COUNT_TOL) and a mean ratio higher by more than
-    MEAN_TIE with a minimum at least b's (or at least MIN_ENOUGH; to MIN_TIE), or a mean
-    within MEAN_TIE of b's and a higher minimum?  (A perfect lattice whose
+    MEAN_TIE with a minimum at least b's (or at least MIN_ENOUGH) less MIN_TRADE of
+    the gain, at most MIN_TRADE_MAX (a minimum a hair lower, or both at a sharp
+    corner's bound, does not outweigh the mean), or a mean within MEAN_TIE of b's
+    and a higher minimum?  (A perfect lattice whose
     walls are cut a little longer than the field's size has a few percent
     fewer elements than a centroid mesh, both within COUNT_TOL of the
     field's.)"""
@@ -423,9 +425,11 @@ def _better(a, b, asked):
     fewer = fits_a and fits_b and len(qa) < len(qb)  # fewer elements buy no quality
     if not fewer and abs(len(qa) / len(qb) - 1.0) > BOTH_COUNT:
         return False
-    if abs(qa.mean() - qb.mean()) <= MEAN_TIE:
+    gain = float(qa.mean() - qb.mean())
+    if abs(gain) <= MEAN_TIE:
         return bool(qa.min() > qb.min())
-    return bool(qa.mean() > qb.mean() and qa.min() >= min(qb.min(), MIN_ENOUGH) - MIN_TIE)
+    slack = min(MIN_TRADE_MAX, MIN_TRADE * gain)
+    return bool(gain > 0.0 and qa.min() >= min(qb.min(), MIN_ENOUGH) - slack)
 
 
 def _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, clock,

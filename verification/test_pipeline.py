@@ -450,8 +450,9 @@ def test_the_portfolio_ranking_follows_its_rule():
     """bm.mesh's choice between its small-domain meshes, case by case from
     the documented rule: fewer elements below 0.7 first, then a count that
     fits the field, then a higher mean with a minimum that is at least the
-    other's or at least MIN_ENOUGH, at a count within BOTH_COUNT; means
-    within MEAN_TIE ranked by their minimum; minima within MIN_TIE tie."""
+    other's less MIN_TRADE of the gain (at most MIN_TRADE_MAX) or at least
+    MIN_ENOUGH, at a count within BOTH_COUNT; means within MEAN_TIE ranked
+    by their minimum."""
     better, enough = pipeline._better, pipeline.MIN_ENOUGH
     n = 100
     base = _Rated(*([0.95] * (n - 1) + [0.85]))
@@ -461,11 +462,17 @@ def test_the_portfolio_ranking_follows_its_rule():
     assert better(_Rated(*([0.9] * n)), _Rated(*([0.99] * (n + 10))), n)
     # a higher mean with a minimum at least the other's
     assert better(_Rated(*([0.96] * (n - 1) + [0.85])), base, n)
-    # a higher mean with a lower minimum, below MIN_ENOUGH: no
-    assert not better(_Rated(*([0.97] * (n - 1) + [0.84])), base, n)
-    # unless the minima tie within MIN_TIE (both at a sharp corner's bound)
-    assert better(_Rated(*([0.97] * (n - 1) + [0.85 - 0.5 * pipeline.MIN_TIE])), base, n)
-    assert not better(_Rated(*([0.97] * (n - 1) + [0.85 - 2 * pipeline.MIN_TIE])), base, n)
+    # a gain of 0.02 in the mean may lower the minimum by MIN_TRADE_MAX, not more
+    drop = pipeline.MIN_TRADE_MAX
+    assert better(_Rated(*([0.97] * (n - 1) + [0.85 - 0.9 * drop])), base, n)
+    assert not better(_Rated(*([0.97] * (n - 1) + [0.85 - 1.1 * drop])), base, n)
+    # a gain of 0.001 only by MIN_TRADE of it
+    small = _Rated(*([0.95 + 0.001 * n / (n - 1)] * (n - 1) + [0.85]))
+    gain = small.ratios.mean() - base.ratios.mean()
+    trade = pipeline.MIN_TRADE * gain
+    for factor, kept in ((0.9, True), (1.1, False)):
+        lowered = _Rated(*(list(small.ratios[:-1]) + [0.85 - factor * trade]))
+        assert better(lowered, base, n) == kept
     # a higher mean with a lower minimum that is still above MIN_ENOUGH: yes
     high = _Rated(*([0.95] * (n - 1) + [0.95]))
     assert better(_Rated(*([0.97] * (n - 1) + [enough + 0.01])), high, n)
