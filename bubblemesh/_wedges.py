@@ -13,8 +13,9 @@ so short that its first node would not fit in its first half), so the
 corner's own triangle has legs r and r sqrt(q).  q maximises the zigzag's radius ratio
 (eq. 10: 0.97 at 20 degrees) and, where an isosceles corner triangle could
 reach 0.7 (SHARP_ANGLE and up), the corner triangle's too.  The progression
-stops where its spacing would exceed the size field or it reaches the middle
-of the wall; the field splits the rest.  Needles (corners under NEEDLE) are
+stops where its spacing would exceed the size field, or at the middle of a
+wall graded from both ends (else where its next node would leave the wall);
+the field splits the rest.  Needles (corners under NEEDLE) are
 left alone: their progression would take more than MAX_PER_WALL nodes of
 nearly one position.  Concentric shells around small input angles play the
 same part in Ruppert-type refinement.
@@ -149,6 +150,10 @@ def _progressions(a, b, node_a, node_b, theta, size, below):
     seg = np.concatenate([np.arange(n), np.arange(n)])[graded]
     at_start = np.arange(2 * n)[graded] < n
     node = ends[graded]
+    far = np.concatenate([node_b, node_a])[graded]
+    # a wall graded from both ends is shared at its middle; else the progression may run
+    # on while its next node still lies on the wall
+    shared = (theta[far] < below) & (theta[far] >= NEEDLE)
     corner = np.where(at_start[:, None], a[seg], b[seg])
     away = np.where(at_start[:, None], b[seg], a[seg]) - corner
     length = np.hypot(away[:, 0], away[:, 1])
@@ -171,7 +176,8 @@ def _progressions(a, b, node_a, node_b, theta, size, below):
     u = dist / length[:, None]
     where = corner[:, None, :] + u[:, :, None] * away[:, None, :]
     h = size(where.reshape(-1, 2)).reshape(u.shape) if len(corner) else u
-    fits = np.logical_and.accumulate((u <= 0.5) & ((q[:, None] - 1.0) * dist <= h), axis=1)
+    inside = np.where(shared[:, None], u <= 0.5, u * q[:, None] <= 1.0)
+    fits = np.logical_and.accumulate(inside & ((q[:, None] - 1.0) * dist <= h), axis=1)
     return seg, at_start, u, fits, where, (q[:, None] - 1.0) * dist
 
 

@@ -66,32 +66,36 @@ def _kite(theta, length=3.0):
 
 
 def _expected_distances(theta, h, length, offset):
-    """The graded nodes' distances from the corner (module docstring), rebuilt."""
+    """The graded nodes' distances from the corner (module docstring), rebuilt,
+    on a wall whose far end is blunt: nodes while the next one is on the wall."""
     q, out, k = float(zigzag_ratio(theta)), [], 0
     while k < MAX_PER_WALL:
         d = h * q ** (k + offset)
-        if d > 0.5 * length or (q - 1) * d > h:
+        if d * q > length or (q - 1) * d > h:
             break
         out.append(d)
         k += 1
     return np.array(out)
 
 
+# walls of 3 end where the spacing reaches h; walls of 1 at 5 and 12 degrees run past
+# their middle (their far ends are blunt)
+@pytest.mark.parametrize("length", [3.0, 1.0])
 @pytest.mark.parametrize("degrees", [5, 12, 20, 30, 38])
-def test_walls_of_a_sharp_corner_are_graded_by_the_rule(degrees):
+def test_walls_of_a_sharp_corner_are_graded_by_the_rule(degrees, length):
     theta, h = math.radians(degrees), 0.1
-    loops = _kite(theta)
+    loops = _kite(theta, length)
     result = refine_boundary(loops, h, sharp_angle=GRADE_ANGLE)
     check_refinement([np.asarray(loops[0])], result)
     loop = result.loops[0]
     out_wall = np.hypot(*loop[1:result.input_index[0][1]].T)  # corner -> (3, 0)
     in_wall = np.hypot(*loop[result.input_index[0][3] + 1:][::-1].T)  # corner -> the 4th node
-    expected = [_expected_distances(theta, h, 3.0, s) for s in (0.0, 0.5)]
+    expected = [_expected_distances(theta, h, length, s) for s in (0.0, 0.5)]
     assert len(expected[0]) >= 1
     got = sorted((out_wall, in_wall), key=lambda w: w[0])  # the half-step wall starts farther
     for wall, want in zip(got, expected):
         # placement may round t to 20 bits for a node exactly on the segment
-        np.testing.assert_allclose(wall[:len(want)], want, rtol=0, atol=2.0**-21 * 3.0)
+        np.testing.assert_allclose(wall[:len(want)], want, rtol=0, atol=2.0**-21 * length)
         assert np.diff(wall[len(want) - 1:]).max() <= 1.2 * h  # then the field's pieces
 
 
@@ -151,6 +155,19 @@ def test_two_sharp_corners_on_one_wall():
     apex = (1.5, 1.5 * math.tan(A))
     domain = bm.Domain.from_loops([np.array([(0.0, 0.0), (3.0, 0.0), apex])])
     mesh = bm.mesh(domain, max_area=domain.area / 300)
+    check_valid(mesh.points, mesh.triangles, mesh.neighbors)
+    assert _off_corner_minimum(mesh)[0] >= 0.7
+
+
+@pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
+@pytest.mark.parametrize("degrees", [4, 6, 8, 12])
+def test_a_wedge_whose_first_walls_are_short_stays_above_0_7(degrees):
+    # the corner's walls bend after 0.5, far shorter than h / (q - 1): the zigzag must
+    # run to their ends, where the next walls' feature size takes over
+    t = math.tan(math.radians(degrees))
+    loop = np.array([(0.0, 0.0), (0.5, -0.5 * t), (3.0, -3.0 * t - 0.3), (3.0, 0.5),
+                     (1.5, 0.5), (1.5, 0.0)])
+    mesh = bm.mesh(bm.Domain.from_loops([loop]), max_area=0.02)
     check_valid(mesh.points, mesh.triangles, mesh.neighbors)
     assert _off_corner_minimum(mesh)[0] >= 0.7
 
