@@ -123,7 +123,7 @@ from .topology import neighbors_of
 from .triangulation import constrained_delaunay
 
 __all__ = ["QualityWarning", "RobustGenerationStats", "RobustOptimizationStats", "robust_mesh",
-           "corner_angles", "best_corner_ratio", "SHARP_ANGLE"]
+           "size_field", "corner_angles", "best_corner_ratio", "SHARP_ANGLE"]
 
 
 GRADE_ANGLE = math.radians(40.0)  # walls of sharper corners are split in geometric progression
@@ -335,6 +335,18 @@ def _sized(domain, size, max_area, gradation):
     except (TypeError, ValueError) as error:
         raise type(error)(f"mesh: {error}") from None
     return field, channel, fine
+
+
+def size_field(domain, *, size=None, max_area=None, gradation=0.25) -> SizeField:
+    """The size field :func:`robust_mesh` meshes ``domain`` to (step 1): the
+    user's ``size`` and ``max_area``, the regions' max_area, the input
+    spacing and the feature size, graded, with the sharp corners' wedge
+    sources where it has no cap.  What a study predicts counts from and
+    hands a peer mesher."""
+    if not isinstance(domain, Domain):
+        raise TypeError(f"size_field: domain must be a bubblemesh.Domain, "
+                        f"got {type(domain).__name__}")
+    return _with_wedges(domain, _plain_field(domain, size, max_area, gradation))
 
 
 def _plain_field(domain, size, max_area, gradation):

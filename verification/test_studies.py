@@ -734,3 +734,24 @@ def test_gmsh_keeps_a_pslgs_constraints_and_free_points():
     plain = bm.mesh(bm.Domain.from_loops([domain.points[square], domain.points[hole]]),
                     max_area=0.01)
     assert not Q.measure(domain, plain.points, plain.triangles)["valid"]
+
+
+def test_the_studys_field_is_the_meshers_with_its_regional_areas():
+    """A square split by a wall into a left region of max_area 0.02 and a right
+    one of 0.5, no global size: the study predicts the count from (and gives
+    Gmsh) bm.mesh's own field: its prediction is at least the elements of
+    equilateral triangles of FILL times each region's area bound (without the
+    regions' sizes: the few dozen the input spacing asks for), and bm's count
+    is within the 5% target of it."""
+    pytest.importorskip("gmsh")
+    pytest.importorskip("triangle")
+    from bubblemesh._area_bound import FILL
+    from bubblemesh.studies.quality import case_rows
+
+    square = [(0, 0), (4, 0), (8, 0), (8, 8), (4, 8), (0, 8)]
+    domain = bm.Domain.from_pslg(loops=[square], constraints=[[(4, 0), (4, 8)]],
+                                 regions=[(1.0, 4.0, 0.0, 0.02), (7.0, 4.0, 1.0, 0.5)])
+    rows = {r["mesher"]: r for r in case_rows("two regions", domain, {})}
+    floor = 32 / (FILL * 0.02) + 32 / (FILL * 0.5)
+    assert rows["bm"]["predicted"] >= floor
+    assert abs(rows["bm"]["ratio"] - 1) <= 0.05
