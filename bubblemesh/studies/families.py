@@ -14,7 +14,11 @@ Families (every draw from one ``numpy`` generator seeded with ``--seed``):
 - ``graded``: the same plates with a graded size function (a point source, a
   ramp along x or a band along a line; needs shapely);
 - ``narrow``: corner-only L-shaped strips, parallelograms and trapezoids 1
-  wide, 2-8 long, meshed with max_area = area / 40-600.
+  wide, 2-8 long, meshed with max_area = area / 40-600;
+- ``sharp``: corner-only stars of 4-12 spikes, saw-tooth combs of 3-9 teeth
+  (5-20 degrees) on a square, and NACA 00xx airfoils with a sharp trailing
+  edge (20-120 nodes, cosine spaced) turned up to 17 degrees in a box; meshed
+  with max_area = area / 100-1000.
 
 The rows are :func:`bubblemesh.studies.quality.case_rows`; prints each case
 and the targets bm misses, and writes <family>_vs_gmsh.csv to ``--out``.
@@ -114,7 +118,47 @@ def narrow(n, seed):
                {"max_area": domain.area / int(rng.integers(40, 600))})
 
 
-FAMILIES = {"plates": plates, "graded": graded, "narrow": narrow}
+def _star(rng):
+    spikes, inner = int(rng.integers(4, 13)), rng.uniform(0.2, 0.7)
+    angle = np.arange(2 * spikes) * np.pi / spikes + rng.uniform(0, 0.3)
+    radius = np.where(np.arange(2 * spikes) % 2 == 0, 1.0, inner)
+    radius = radius * rng.uniform(0.8, 1.2, 2 * spikes)
+    return [np.column_stack([radius * np.cos(angle), radius * np.sin(angle)])]
+
+
+def _saw(rng):
+    teeth, depth = int(rng.integers(3, 10)), rng.uniform(0.3, 1.5)
+    w = 1.0 / teeth
+    top = [(j * w + 0.5 * w * s, 1.0 + depth * s) for j in range(teeth) for s in (0, 1)]
+    return [np.array([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), *top[::-1]])]
+
+
+def _airfoil(rng):
+    """A NACA 00xx section of chord 1 (the closed-trailing-edge thickness
+    formula), its two sides meeting at a sharp trailing edge, in a box."""
+    thickness, nodes = rng.uniform(0.06, 0.2), int(rng.integers(20, 120))
+    x = 0.5 * (1 - np.cos(np.linspace(0, np.pi, nodes)))
+    y = 5 * thickness * (0.2969 * np.sqrt(x) - 0.126 * x - 0.3516 * x**2
+                         + 0.2843 * x**3 - 0.1036 * x**4)
+    y[-1] = 0.0
+    foil = np.vstack([np.column_stack([x, y])[::-1], np.column_stack([x, -y])[1:-1]])
+    a = rng.uniform(-0.3, 0.3)
+    foil = foil @ np.array([[np.cos(a), np.sin(a)], [-np.sin(a), np.cos(a)]])
+    return [np.array([(-1.0, -1.0), (2.5, -1.0), (2.5, 1.0), (-1.0, 1.0)]), foil]
+
+
+def sharp(n, seed):
+    """(name, domain, bm.mesh keywords) for ``n`` domains with sharp corners."""
+    rng = np.random.default_rng(seed)
+    for i in range(n):
+        kind = int(rng.integers(3))
+        loops = (_star, _saw, _airfoil)[kind](rng)
+        domain = bm.Domain.from_loops(loops)
+        yield (f"{('star', 'saw', 'airfoil')[kind]} {seed}.{i}", domain,
+               {"max_area": domain.area / int(rng.integers(100, 1000))})
+
+
+FAMILIES = {"plates": plates, "graded": graded, "narrow": narrow, "sharp": sharp}
 
 
 def sweep(family, n, seed, out_dir=None):
