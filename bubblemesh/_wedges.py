@@ -203,14 +203,22 @@ def wedge_parameters(a, b, node_a, node_b, theta, size, below):
     return owner[order], t[order], lo, hi
 
 
-def wedge_sources(domain: Domain, size, below):
+def wedge_sources(domain: Domain, size, below, outer_below=None):
     """The graded nodes of ``domain``'s walls (where :func:`wedge_parameters`
     puts them) and their spacing (q - 1) times the distance to the corner:
     size sources that make the field follow the zigzag, so the element bubbles
-    there (eq. 3-4) are the zigzag's and not the far larger field's."""
+    there (eq. 3-4) are the zigzag's and not the far larger field's.  With
+    ``outer_below`` only those beside corners sharper than it on the
+    boundary's walls, not on interior constraints (whose other side they
+    would refine too)."""
     node_a = np.concatenate(domain.loops)
     node_b = np.concatenate([np.roll(ix, -1) for ix in domain.loops])
     P = np.asarray(domain.points)
-    _, _, _, fits, where, spacing = _progressions(P[node_a], P[node_b], node_a, node_b,
-                                                  corner_angles(domain), size, below)
+    theta = corner_angles(domain)
+    seg, at_start, _, fits, where, spacing = _progressions(P[node_a], P[node_b], node_a,
+                                                           node_b, theta, size, below)
+    if outer_below is not None:
+        corner = np.where(at_start, node_a[seg], node_b[seg])
+        kept = ~np.asarray(domain.interior, bool)[seg] & (theta[corner] < outer_below)
+        fits &= kept[:, None]
     return where[fits], spacing[fits]

@@ -528,14 +528,17 @@ def refined_domain(domain, field, rounding="nearest", splits=None):
 
 def _with_wedges(domain, field):
     """``field`` with sources on the graded walls of sharp corners
-    (:func:`~bubblemesh._wedges.wedge_sources`) where it has no cap, else
-    itself.  Without a cap the field beside a corner can grow far beyond the
-    zigzag's triangles, their element bubbles with it, and eq. 6 would stop
-    §2 early; under a cap the bubbles overshoot by a few elements, and the
-    sources' cones would refine the corner's surroundings by more."""
-    if math.isfinite(field.cap):
-        return field
-    points, values = wedge_sources(domain, field, GRADE_ANGLE)
+    (:func:`~bubblemesh._wedges.wedge_sources`).  Without a cap the field
+    beside a corner can grow far beyond the zigzag's triangles, their element
+    bubbles with it, and eq. 6 would stop §2 early.  Under a cap only those on
+    the boundary's walls beside corners sharper than SHARP_ANGLE: there the
+    zigzag is the whole wedge, and a field without it asks for far fewer
+    elements than the wedge holds; on an interior constraint's walls their
+    cones would refine the other side too, and at blunter corners frontal
+    insertion would split the corner's own triangle."""
+    capped = math.isfinite(field.cap)
+    points, values = wedge_sources(domain, field, GRADE_ANGLE,
+                                   outer_below=SHARP_ANGLE if capped else None)
     if not len(points):
         return field
     return SizeField(np.vstack([field.points, points]), np.concatenate([field.values, values]),

@@ -172,6 +172,31 @@ def test_a_wedge_whose_first_walls_are_short_stays_above_0_7(degrees):
     assert _off_corner_minimum(mesh)[0] >= 0.7
 
 
+def _saw(teeth, depth):
+    """A unit square whose top is a saw of ``teeth`` sharp teeth ``depth`` tall."""
+    w = 1.0 / teeth
+    top = [(j * w + 0.5 * w * s, 1.0 + depth * s) for j in range(teeth) for s in (0, 1)]
+    return np.array([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), *top[::-1]])
+
+
+@pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
+@pytest.mark.parametrize("teeth, depth", [(5, 1.29), (9, 0.67)])
+def test_sharp_teeth_under_a_max_area_get_the_count_their_field_asks_for(teeth, depth):
+    # teeth of 11 and 8.5 degrees: their zigzags are the whole tooth; the field
+    # bm.mesh (and the study) count from must hold them, or the count is 1.4-1.7
+    # times what it asks for
+    from bubblemesh.pipeline import size_field
+    from bubblemesh.studies.quality import predicted_count
+
+    domain = bm.Domain.from_loops([_saw(teeth, depth)])
+    max_area = domain.area / 100
+    mesh = bm.mesh(domain, max_area=max_area)
+    check_valid(mesh.points, mesh.triangles, mesh.neighbors)
+    asked = predicted_count(domain, size_field(domain, max_area=max_area), 1e-3).count
+    assert abs(len(mesh.triangles) / asked - 1) <= 0.05
+    assert _off_corner_minimum(mesh)[0] >= 0.7
+
+
 def test_a_flat_triangle_gets_a_frontal_node_without_dividing_by_zero():
     # seen from node 2, 1e17 - 1 rounds to 1e17: the circumcentre's denominator is 0
     P = np.array([[0.0, 0.0], [1.0, 0.0], [1e17, 1e-3]])
