@@ -341,7 +341,7 @@ def size_field(domain, *, size=None, max_area=None, gradation=0.25) -> SizeField
     """The size field :func:`robust_mesh` meshes ``domain`` to (step 1): the
     user's ``size`` and ``max_area``, the regions' max_area, the input
     spacing and the feature size, graded, with the sharp corners' wedge
-    sources where it has no cap.  What a study predicts counts from and
+    sources (:func:`_with_wedges`).  What a study predicts counts from and
     hands a peer mesher."""
     if not isinstance(domain, Domain):
         raise TypeError(f"size_field: domain must be a bubblemesh.Domain, "

@@ -119,6 +119,7 @@ def narrow(n, seed):
 
 
 def _star(rng):
+    """A star of 4-12 spikes, its radii jittered by up to 20%."""
     spikes, inner = int(rng.integers(4, 13)), rng.uniform(0.2, 0.7)
     angle = np.arange(2 * spikes) * np.pi / spikes + rng.uniform(0, 0.3)
     radius = np.where(np.arange(2 * spikes) % 2 == 0, 1.0, inner)
@@ -127,6 +128,7 @@ def _star(rng):
 
 
 def _saw(rng):
+    """A unit square whose top is a saw of 3-9 teeth 0.3-1.5 tall."""
     teeth, depth = int(rng.integers(3, 10)), rng.uniform(0.3, 1.5)
     w = 1.0 / teeth
     top = [(j * w + 0.5 * w * s, 1.0 + depth * s) for j in range(teeth) for s in (0, 1)]
