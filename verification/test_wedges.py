@@ -206,7 +206,6 @@ def test_a_flat_triangle_gets_a_frontal_node_without_dividing_by_zero():
     assert y > 0.0  # on the triangle's side of the edge
 
 
-
 @pytest.mark.heavy
 @pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
 def test_a_sector_with_a_fine_arc_gets_its_count():
