@@ -19,21 +19,37 @@ the field splits the rest.  Needles (corners under NEEDLE) are
 left alone: their progression would take more than MAX_PER_WALL nodes of
 nearly one position.  Concentric shells around small input angles play the
 same part in Ruppert-type refinement.
+
+From SHARP_ANGLE to about 33 degrees the zigzag's corner triangle (legs r and
+r sqrt(q)) stays below 0.7 (0.59 at 26.5 degrees), or meets it only with the
+zigzag's own triangles near 0.7, though an isosceles one reaches it.  There a
+boundary corner of two walls gets a ladder instead: s = 0 on both walls (the
+corner's triangle isosceles), ratio g, and one node per layer on the bisector
+(:func:`ladder_points`, fixed like the walls' nodes), so that each layer
+between distances d and g d is four triangles around it; g and the node's
+place maximise their worst ratio (0.79 at 26.5 degrees).  A ladder runs while
+the wedge is narrower than LADDER_WIDTH h, on both walls alike and short of
+anything else in its wedge; one without a whole layer is a zigzag again.
 """
 
 from __future__ import annotations
 
+import functools
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from bubblemesh.domain import Domain
 from bubblemesh.quality import radius_ratio
 
-__all__ = ["corner_angles", "best_corner_ratio", "zigzag_ratio", "wedge_parameters",
-           "wedge_sources", "SHARP_ANGLE"]
+__all__ = ["corner_angles", "best_corner_ratio", "zigzag_ratio", "ladder_parameters",
+           "wedge_parameters", "wedge_sources", "ladder_points", "SHARP_ANGLE"]
 
 MAX_PER_WALL = 64  # graded nodes at most on one wall beside one corner
+CLEARANCE_BLOCK = 1 << 20  # corner-segment pairs per block of a ladder's clearance
+LADDER_WIDTH = 1.3  # a ladder runs on while the wedge is narrower than this times the size
+LADDER_TOP = math.radians(40.0)  # the ladder's table spans SHARP_ANGLE to this
 NEEDLE = math.radians(3.0)  # sharper corners are needles: a progression would crowd them
 _GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
 
@@ -112,11 +128,11 @@ def _corner_quality(theta, q):
     return np.where(theta < SHARP_ANGLE, 1.0, ratio)
 
 
-def _best_ratio(quality, theta):
-    """argmax over q in (1, 4] of quality(theta, q), which rises then falls in q
-    (golden-section search)."""
-    lo, hi = np.full(theta.shape, 1.0 + 1e-6), np.full(theta.shape, 4.0)
-    for _ in range(48):  # the bracket shrinks to 0.618**48 of 3: far below any use
+def _golden(quality, theta, lo, hi, rounds=48):
+    """argmax over x in (lo, hi) of quality(theta, x), which rises then falls
+    in x (golden-section search, broadcast over theta)."""
+    lo, hi = np.full(theta.shape, float(lo)), np.full(theta.shape, float(hi))
+    for _ in range(rounds):  # 48 shrink the bracket to 0.618**48 of its width: far below any use
         a = hi - _GOLDEN * (hi - lo)
         b = lo + _GOLDEN * (hi - lo)
         left = quality(theta, a) >= quality(theta, b)
@@ -124,8 +140,78 @@ def _best_ratio(quality, theta):
     return 0.5 * (lo + hi)
 
 
+def _best_ratio(quality, theta):
+    """argmax over q in (1, 4] of quality(theta, q)."""
+    return _golden(quality, theta, 1.0 + 1e-6, 4.0)
+
+
 def _both_quality(theta, q):
     return np.minimum(_zigzag_quality(theta, q), _corner_quality(theta, q))
+
+
+def _ladder_triangles(theta, g, t):
+    """The four triangles of the ladder's layer between distances 1 and g from
+    a corner of angle theta, around its node at (1 + t (g - 1)) cos(theta / 2)
+    on the bisector, as (..., 4, 3, 2) corners."""
+    theta, g, t = np.broadcast_arrays(*(np.asarray(v, dtype=np.float64) for v in (theta, g, t)))
+    c, s = np.cos(theta / 2), np.sin(theta / 2)
+    zero = np.zeros(theta.shape)
+    a0, b0 = np.stack([c, s], axis=-1), np.stack([c, -s], axis=-1)
+    a1, b1 = g[..., None] * a0, g[..., None] * b0
+    x = np.stack([c * (1.0 + t * (g - 1.0)), zero], axis=-1)
+    tris = [(a0, b0, x), (b0, b1, x), (b1, a1, x), (a1, a0, x)]
+    return np.stack([np.stack(tri, axis=-2) for tri in tris], axis=-3)
+
+
+def _ladder_layer(theta, g, t):
+    """The worse eq. 10 ratio of the ladder layer's four triangles (as
+    16 A^2 / (l1 l2 l3 (l1 + l2 + l3)), inline: the searches call it often)."""
+    p = _ladder_triangles(theta, g, t)
+    e = np.roll(p, -1, axis=-2) - p
+    lengths = np.hypot(e[..., 0], e[..., 1])
+    area = 0.5 * (e[..., 0, 0] * e[..., 1, 1] - e[..., 0, 1] * e[..., 1, 0])
+    ratio = 16.0 * area * area / (lengths.prod(axis=-1) * lengths.sum(axis=-1))
+    return ratio.min(axis=-1)
+
+
+def _ladder_node(theta, g):
+    """t of :func:`_ladder_triangles` that maximises the layer's worst ratio
+    (to 1e-5: the ratios are flat at their best)."""
+    return _golden(lambda th, t: _ladder_layer(th, g, t), theta, 0.0, 1.0, rounds=24)
+
+
+def _ladder_quality(theta, g):
+    return _ladder_layer(theta, g, _ladder_node(theta, g))
+
+
+@functools.cache
+def _ladder_table():
+    """Per angle of a grid from SHARP_ANGLE to LADDER_TOP: the ratio g that
+    maximises the ladder layers' worst ratio, the node's t there, and whether
+    the ladder's worst (its layers' and the isosceles corner triangle's) beats
+    the zigzag's (at the zigzag's own ratio).  Searched once, on first use: two
+    nested golden sections over every angle cost a third of a second."""
+    theta = np.linspace(SHARP_ANGLE, LADDER_TOP, 81)
+    g = _golden(_ladder_quality, theta, 1.0 + 1e-6, 4.0, rounds=32)
+    q = zigzag_ratio(theta)
+    zigzag = np.minimum(_zigzag_quality(theta, q), _corner_quality(theta, q))
+    better = np.minimum(_ladder_quality(theta, g), best_corner_ratio(theta)) > zigzag
+    return theta, g, _ladder_node(theta, g), better
+
+
+def ladder_parameters(theta):
+    """(g, t, wanted) beside corners of angle theta: the ladder's progression
+    ratio, where its node lies in a layer (:func:`_ladder_triangles`), and
+    whether the corner gets a ladder rather than a zigzag: from SHARP_ANGLE,
+    where an isosceles corner triangle reaches 0.7 but the zigzag's corner
+    triangle does not (or only with the zigzag's own triangles near 0.7), up
+    to where the zigzag's worst is as good as the ladder's.  Interpolated in
+    the table of :func:`_ladder_table`."""
+    grid, g, t, better = _ladder_table()
+    theta = np.asarray(theta, dtype=np.float64)
+    limit = grid[np.argmin(better)] if not better.all() else LADDER_TOP
+    wanted = (theta >= SHARP_ANGLE) & (theta < limit)
+    return np.interp(theta, grid, g), np.interp(theta, grid, t), wanted
 
 
 def zigzag_ratio(theta) -> np.ndarray:
@@ -139,11 +225,37 @@ def zigzag_ratio(theta) -> np.ndarray:
     return np.where(_both_quality(theta, both) >= 0.7, both, alone)
 
 
-def _progressions(a, b, node_a, node_b, theta, size, below):
-    """Per wall end at a corner sharper than ``below`` (and not a needle): its
-    segment, whether the corner is the segment's start, the parameters u of
-    the progression's nodes from the corner (MAX_PER_WALL columns) with the
-    mask of those kept, their distances and the ratio q."""
+class _Walls(NamedTuple):
+    """The graded walls of :func:`_progressions`, one row per wall end at a
+    corner: its segment, whether the corner is the segment's start, the
+    corner's node id and position, the vector from it along the wall, whether
+    the corner gets a ladder, the progression's ratio, and per node (MAX_PER_WALL
+    columns) its parameter u on the segment from the corner, the mask of those
+    kept, its position, its distance and its spacing."""
+
+    seg: np.ndarray
+    at_start: np.ndarray
+    node: np.ndarray
+    corner: np.ndarray
+    away: np.ndarray
+    ladder: np.ndarray
+    q: np.ndarray
+    u: np.ndarray
+    fits: np.ndarray
+    where: np.ndarray
+    dist: np.ndarray
+    spacing: np.ndarray
+
+
+def _progressions(a, b, node_a, node_b, theta, size, below, free, ladder_walls):
+    """Per wall end at a corner sharper than ``below`` (and not a needle), the
+    progression of its graded nodes (:class:`_Walls`).  A corner of exactly two
+    walls, both ``ladder_walls`` (per segment; not an interior constraint's,
+    whose other side would meet the ladder's small pieces), gets a ladder where
+    :func:`ladder_parameters` wants one and it holds a layer: both walls in
+    phase, as far as both go and no farther than the nearest of the ``free``
+    points or of the segments not at the corner, so that the ladder's layers
+    stay in the wedge.  Elsewhere the zigzag."""
     n = len(a)
     ends = np.concatenate([node_a, node_b])
     graded = (theta[ends] < below) & (theta[ends] >= NEEDLE)
@@ -151,20 +263,42 @@ def _progressions(a, b, node_a, node_b, theta, size, below):
     at_start = np.arange(2 * n)[graded] < n
     node = ends[graded]
     far = np.concatenate([node_b, node_a])[graded]
+    corner = np.where(at_start[:, None], a[seg], b[seg])
+    away = np.where(at_start[:, None], b[seg], a[seg]) - corner
+    ladder = (ladder_parameters(theta[node])[2] & (_walls_at(node, far) == 2)
+              & _all_at(node, np.asarray(ladder_walls, bool)[seg]))
+    clearance = _clearance(corner, node, a, b, node_a, node_b, free, ladder)
+    walls = _Walls(seg, at_start, node, corner, away, *_graded(
+        theta, size, below, node, far, corner, away, ladder, clearance))
+    # a ladder needs a layer, two nodes on each wall: else the zigzag
+    empty = walls.ladder & (walls.fits.sum(axis=1) < 2)
+    if not empty.any():
+        return walls
+    at = np.unique(node, return_inverse=True)[1]
+    dropped = np.zeros(at.max() + 1, bool)
+    dropped[at[empty]] = True
+    ladder &= ~dropped[at]
+    return _Walls(seg, at_start, node, corner, away, *_graded(
+        theta, size, below, node, far, corner, away, ladder, clearance))
+
+
+def _graded(theta, size, below, node, far, corner, away, ladder, clearance):
+    """The rest of :class:`_Walls` for the wall ends of :func:`_progressions`
+    (``away`` from the corner along the wall), with the ``ladder`` mask."""
+    length = np.hypot(away[:, 0], away[:, 1])
     # a wall graded from both ends is shared at its middle; else the progression may run
     # on while its next node still lies on the wall
     shared = (theta[far] < below) & (theta[far] >= NEEDLE)
-    corner = np.where(at_start[:, None], a[seg], b[seg])
-    away = np.where(at_start[:, None], b[seg], a[seg]) - corner
-    length = np.hypot(away[:, 0], away[:, 1])
     # the walls at a corner alternate by direction: the zigzag's half-step offset
     order = np.lexsort((np.arctan2(away[:, 1], away[:, 0]), node))
     first = np.searchsorted(node[order], node[order], side="left")
     offset = np.empty(len(node))
     offset[order] = 0.5 * ((np.arange(len(node)) - first) % 2)
-    q = zigzag_ratio(theta[node])
+    offset[ladder] = 0.0
+    q = np.where(ladder, ladder_parameters(theta[node])[0], zigzag_ratio(theta[node]))
     # the corner's r: its size, but small enough that every wall there gets its first node
-    first = 0.5 * length / q**offset
+    # (and a ladder its first layer)
+    first = np.minimum(0.5 * length / q**offset, np.where(ladder, clearance / q**2, np.inf))
     if len(corner):
         first = np.minimum(first, size(corner))
     at = np.unique(node, return_inverse=True)[1]
@@ -177,22 +311,109 @@ def _progressions(a, b, node_a, node_b, theta, size, below):
     where = corner[:, None, :] + u[:, :, None] * away[:, None, :]
     h = size(where.reshape(-1, 2)).reshape(u.shape) if len(corner) else u
     inside = np.where(shared[:, None], u <= 0.5, u * q[:, None] <= 1.0)
-    fits = np.logical_and.accumulate(inside & ((q[:, None] - 1.0) * dist <= h), axis=1)
-    return seg, at_start, u, fits, where, (q[:, None] - 1.0) * dist
+    # a zigzag runs while its spacing is below the field's size, a ladder while the
+    # wedge is narrower than LADDER_WIDTH times it
+    wide = np.where(ladder[:, None], 2.0 * np.sin(0.5 * theta[node])[:, None] / LADDER_WIDTH,
+                    q[:, None] - 1.0) * dist
+    fits = np.logical_and.accumulate(inside & (wide <= h), axis=1)
+    if ladder.any():
+        fits = _ladder_fits(fits, ladder, at, dist, clearance)
+    return ladder, q, u, fits, where, dist, (q[:, None] - 1.0) * dist
 
 
-def wedge_parameters(a, b, node_a, node_b, theta, size, below):
+def _walls_at(node, far):
+    """Per wall end: how many distinct walls (far ends) its corner has."""
+    pairs = np.unique(np.column_stack([node, far]), axis=0)
+    corners, count = np.unique(pairs[:, 0], return_counts=True)
+    return count[np.searchsorted(corners, node)]
+
+
+def _all_at(node, flag):
+    """Per wall end: whether ``flag`` holds at every wall end of its corner."""
+    corners, at = np.unique(node, return_inverse=True)
+    every = np.ones(len(corners), bool)
+    np.logical_and.at(every, at, flag)
+    return every[at]
+
+
+def _clearance(corner, node, a, b, node_a, node_b, free, rows):
+    """For the ``rows`` of the wall ends: the distance from their corner to the
+    nearest of the ``free`` points and of the segments a -> b not at it (inf
+    elsewhere).  Corner by segment, in blocks of about CLEARANCE_BLOCK pairs."""
+    out = np.full(len(node), np.inf)
+    corners, first = np.unique(node[rows], return_index=True)
+    where = corner[rows][first]
+    e = b - a
+    ee = np.maximum((e * e).sum(axis=1), 1e-300)
+    step = max(1, CLEARANCE_BLOCK // max(len(a), 1))
+    near = np.empty(len(corners))
+    for lo in range(0, len(corners), step):
+        c = where[lo:lo + step, None, :]
+        t = np.clip(((c - a) * e).sum(axis=2) / ee, 0.0, 1.0)
+        d = np.hypot(*np.moveaxis(a + t[:, :, None] * e - c, 2, 0))
+        at = (node_a == corners[lo:lo + step, None]) | (node_b == corners[lo:lo + step, None])
+        d[at] = np.inf
+        points = np.hypot(*np.moveaxis(free - c, 2, 0))
+        near[lo:lo + step] = np.minimum(d.min(axis=1, initial=np.inf),
+                                        points.min(axis=1, initial=np.inf))
+    out[rows] = near[np.searchsorted(corners, node[rows])]
+    return out
+
+
+def _ladder_fits(fits, ladder, at, dist, clearance):
+    """``fits`` with each ladder's walls cut to the nodes both walls keep and
+    that lie nearer their corner than its clearance: a layer needs a node on
+    each wall."""
+    count = np.where(ladder, (fits & (dist < clearance[:, None])).sum(axis=1), MAX_PER_WALL)
+    common = np.full(at.max(initial=-1) + 1, MAX_PER_WALL)
+    np.minimum.at(common, at, count)
+    kept = np.arange(fits.shape[1])[None, :] < common[at][:, None]
+    return np.where(ladder[:, None], fits & kept, fits)
+
+
+def ladder_points(domain: Domain, size, below) -> np.ndarray:
+    """The ladders' interior nodes (the module docstring), one per layer: on
+    the corner's bisector, at (1 + t (g - 1)) cos(theta / 2) times the layer's
+    inner distance.  (m, 2) float64, in the order of the domain's nodes."""
+    node_a, node_b = _segment_nodes(domain)
+    P = np.asarray(domain.points)
+    theta = corner_angles(domain)
+    w = _progressions(P[node_a], P[node_b], node_a, node_b, theta, size, below,
+                      free_points(domain), ~np.asarray(domain.interior, bool))
+    rows = np.flatnonzero(w.ladder)
+    if not len(rows):
+        return np.zeros((0, 2))
+    rows = rows[np.unique(w.node[rows], return_index=True)[1]]  # one wall per corner
+    unit = w.away / np.hypot(*w.away.T)[:, None]
+    other = np.array([np.flatnonzero(w.ladder & (w.node == w.node[i]) & (
+        np.abs(unit - unit[i]).sum(axis=1) > 0))[0] for i in rows])
+    bisector = unit[rows] + unit[other]
+    bisector /= np.hypot(*bisector.T)[:, None]
+    half = 0.5 * theta[w.node[rows]]
+    g, t, _ = ladder_parameters(theta[w.node[rows]])
+    layers = np.maximum(w.fits[rows].sum(axis=1) - 1, 0)
+    inner = w.dist[rows][:, :-1]
+    step = (1.0 + t * (g - 1.0)) * np.cos(half)
+    where = w.corner[rows][:, None, :] + (inner * step[:, None])[:, :, None] * bisector[:, None, :]
+    keep = np.arange(inner.shape[1])[None, :] < layers[:, None]
+    return where[keep]
+
+
+def wedge_parameters(a, b, node_a, node_b, theta, size, below, free, ladder_walls):
     """Graded node parameters on segments a -> b beside corners sharper than
     ``below`` (module docstring).
 
     ``node_a``, ``node_b`` are the node ids of the segments' ends, ``theta`` the
-    corner angle per node id, ``size`` the element size (n, 2) -> (n,).
+    corner angle per node id, ``size`` the element size (n, 2) -> (n,),
+    ``free`` the domain's free points (a ladder stays nearer its corner),
+    ``ladder_walls`` per segment whether a ladder may stand on it.
     Returns (seg, t, lo, hi): parameters t in (0, 1) of the graded nodes of
     segment seg (sorted by segment, then t), and per segment the interval
     [lo, hi] of t left to split to the size field."""
     n = len(a)
     lo, hi = np.zeros(n), np.ones(n)
-    seg, at_start, u, fits, _, _ = _progressions(a, b, node_a, node_b, theta, size, below)
+    w = _progressions(a, b, node_a, node_b, theta, size, below, free, ladder_walls)
+    seg, at_start, u, fits = w.seg, w.at_start, w.u, w.fits
     count = fits.sum(axis=1)
     last = np.where(count > 0, u[np.arange(len(u)), np.maximum(count - 1, 0)], 0.0)
     np.maximum.at(lo, seg[at_start], last[at_start])
@@ -203,6 +424,21 @@ def wedge_parameters(a, b, node_a, node_b, theta, size, below):
     return owner[order], t[order], lo, hi
 
 
+def _segment_nodes(domain: Domain):
+    """The node ids at the start and the end of every segment of the loops."""
+    node_a = np.concatenate(domain.loops)
+    node_b = np.concatenate([np.roll(ix, -1) for ix in domain.loops])
+    return node_a, node_b
+
+
+def free_points(domain: Domain) -> np.ndarray:
+    """The domain's nodes on no segment, (m, 2)."""
+    P = np.asarray(domain.points)
+    on_loops = np.zeros(len(P), bool)
+    on_loops[np.concatenate(domain.loops)] = True
+    return P[~on_loops]
+
+
 def wedge_sources(domain: Domain, size, below, outer_below=None):
     """The graded nodes of ``domain``'s walls (where :func:`wedge_parameters`
     puts them) and their spacing (q - 1) times the distance to the corner:
@@ -211,14 +447,13 @@ def wedge_sources(domain: Domain, size, below, outer_below=None):
     ``outer_below`` only those beside corners sharper than it on the
     boundary's walls, not on interior constraints (whose other side they
     would refine too)."""
-    node_a = np.concatenate(domain.loops)
-    node_b = np.concatenate([np.roll(ix, -1) for ix in domain.loops])
+    node_a, node_b = _segment_nodes(domain)
     P = np.asarray(domain.points)
     theta = corner_angles(domain)
-    seg, at_start, _, fits, where, spacing = _progressions(P[node_a], P[node_b], node_a,
-                                                           node_b, theta, size, below)
+    w = _progressions(P[node_a], P[node_b], node_a, node_b, theta, size, below,
+                      free_points(domain), ~np.asarray(domain.interior, bool))
+    fits = w.fits
     if outer_below is not None:
-        corner = np.where(at_start, node_a[seg], node_b[seg])
-        kept = ~np.asarray(domain.interior, bool)[seg] & (theta[corner] < outer_below)
-        fits &= kept[:, None]
-    return where[fits], spacing[fits]
+        kept = ~np.asarray(domain.interior, bool)[w.seg] & (theta[w.node] < outer_below)
+        fits = fits & kept[:, None]
+    return w.where[fits], w.spacing[fits]

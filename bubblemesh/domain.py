@@ -452,7 +452,8 @@ class Domain:
 
 def _sampled(domain: Domain, size, gradation: float) -> Domain:
     """``domain``'s segments split by the size field of ``size`` (bm.mesh's),
-    rounded up: a user's size is a bound on every piece."""
+    rounded up: a user's size is a bound on every piece.  No ladders: the
+    domain gets no nodes off its segments."""
     from .pipeline import refined_domain
     from .sizing import SizeField
 
@@ -460,7 +461,7 @@ def _sampled(domain: Domain, size, gradation: float) -> Domain:
         field = SizeField.from_domain(domain, size=size, gradation=gradation)
     except (TypeError, ValueError) as error:
         raise type(error)(f"from_shapely: {error}") from None
-    return refined_domain(domain, field, rounding="up")
+    return refined_domain(domain, field, rounding="up", ladders=False)
 
 
 def _polygon_parts(geometry, what: str, strict: bool = True) -> list:

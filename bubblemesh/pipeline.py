@@ -111,8 +111,8 @@ from ._seeds import frontal_seeds, inside
 from ._smoothing import compass_polish, guarded_smooth, stars, triangle_quality
 from ._untangle import untangle
 from ._verlet import VerletLists
-from ._wedges import SHARP_ANGLE, best_corner_ratio, corner_angles, wedge_sources
-from .domain import Domain
+from ._wedges import SHARP_ANGLE, best_corner_ratio, corner_angles, ladder_points, wedge_sources
+from .domain import Domain, _read_only
 from .errors import GeometryError, MeshingError
 from .generation import generate_sized, refuse_beyond_memory
 from .quality import radius_ratio
@@ -512,18 +512,25 @@ def _stretched(generated, field):
     return bool((room > 0.5 * h[long]).any())
 
 
-def refined_domain(domain, field, rounding="nearest", splits=None):
+def refined_domain(domain, field, rounding="nearest", splits=None, ladders=True):
     """``domain`` with its segments split where ``field`` asks for it
     (:func:`bubblemesh.refinement.refine_boundary`: the input nodes first and
     unmoved, the new ones on their segments; the piece count rounded to the
     nearest by default, so the walls' first rows are as dense as the field;
-    ``splits`` as it takes them), as a Domain."""
+    ``splits`` as it takes them), as a Domain; with ``ladders`` the ladders'
+    nodes (:func:`bubblemesh._wedges.ladder_points`) as free points after
+    the input's."""
     refined = refine_boundary(domain, field, sharp_angle=GRADE_ANGLE, rounding=rounding,
-                              splits=splits)
+                              splits=splits, ladders=ladders)
     try:
-        return refined.to_domain()
+        fine = refined.to_domain()
     except GeometryError:  # a node an ulp off its segment touches a part a few ulps away
-        return refined.exact_only().to_domain()
+        fine = refined.exact_only().to_domain()
+    rungs = ladder_points(domain, field, GRADE_ANGLE) if ladders else ()
+    if not len(rungs):
+        return fine
+    # the ladders' nodes are free points: fixed, like the walls' nodes they pair with
+    return replace(fine, points=_read_only(np.vstack([fine.points, rungs])))
 
 
 def _with_wedges(domain, field):

@@ -40,7 +40,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numba import njit, prange
 
-from bubblemesh._wedges import corner_angles, wedge_parameters
+from bubblemesh._wedges import corner_angles, free_points, wedge_parameters
 from bubblemesh.domain import Domain
 from bubblemesh.errors import GeometryError, MeshingError
 from bubblemesh.predicates import orient2d
@@ -155,7 +155,7 @@ def _graph_domain(refined: RefinedBoundary, source: Domain, marks, interior) -> 
 
 def refine_boundary(
     domain_or_loops, h, *, resolution: float = 0.125, max_nodes: int = MAX_SOURCES,
-    sharp_angle: float = 0.0, rounding: str = "up", splits=None,
+    sharp_angle: float = 0.0, rounding: str = "up", splits=None, ladders: bool = True,
 ) -> RefinedBoundary:
     """Split the boundary segments to the size ``h`` (a :class:`SizeField`, a
     positive number or a vectorised callable (n, 2) -> (n,)).
@@ -164,7 +164,9 @@ def refine_boundary(
     :meth:`Domain.from_loops` takes them (validated, kept in the given order).
     The walls of corners sharper than ``sharp_angle`` (radians) get nodes in
     geometric progression from the corner (:mod:`bubblemesh._wedges`), the
-    rest of them the nodes above.  ``rounding="nearest"`` takes n = round(I)
+    rest of them the nodes above; ``ladders=False`` keeps every such corner a
+    zigzag (a ladder's walls need its free nodes, which
+    :func:`~bubblemesh._wedges.ladder_points` gives).  ``rounding="nearest"`` takes n = round(I)
     pieces instead of ceil(I) (at least ceil(I / NEAREST_CAP)): pieces up to
     NEAREST_CAP h, but on average as long as h, so the first row of elements
     along a wall is as dense as the field, not up to twice as dense.
@@ -195,8 +197,10 @@ def refine_boundary(
         node_a, np.cumsum([len(ring) for ring in rings])[:-1])])
     if canon is not None:
         node_a, node_b = node_a[canon], node_b[canon]
+    walls = ~np.asarray(domain.interior, bool) & ladders  # where a ladder may stand
     graded = wedge_parameters(ca, cb, node_a, node_b, corner_angles(domain), size,
-                              float(sharp_angle))
+                              float(sharp_angle), free_points(domain),
+                              walls if canon is None else walls[canon])
     if splits:
         graded = _with_splits(graded, node_a, node_b, splits, given)
     seg, t, values = _samples(ca, cb, length, size, resolution, max_nodes)

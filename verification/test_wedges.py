@@ -21,7 +21,16 @@ from test_refinement import check_refinement
 
 import bubblemesh as bm
 from bubblemesh._frontal import frontal_point
-from bubblemesh._wedges import MAX_PER_WALL, NEEDLE, SHARP_ANGLE, corner_angles, zigzag_ratio
+from bubblemesh._wedges import (
+    LADDER_WIDTH,
+    MAX_PER_WALL,
+    NEEDLE,
+    SHARP_ANGLE,
+    corner_angles,
+    ladder_parameters,
+    ladder_points,
+    zigzag_ratio,
+)
 from bubblemesh.pipeline import GRADE_ANGLE
 from bubblemesh.refinement import refine_boundary
 
@@ -58,6 +67,38 @@ def test_the_progression_ratio_is_the_best_one(theta):
         assert got_zig >= zig.max() - 1e-6
 
 
+def _ladder_layer_oracle(theta, g, t):
+    """The worst ratio of a ladder layer's four triangles (the module docstring:
+    walls in phase at distances 1 and g, the node at (1 + t (g - 1)) cos(theta/2)
+    on the bisector), from their angles, for arrays g and t."""
+    c, s = math.cos(theta / 2), math.sin(theta / 2)
+    g, t = np.broadcast_arrays(np.asarray(g, float), np.asarray(t, float))
+    a0 = np.tile([c, s], (g.size, 1))
+    b0 = np.tile([c, -s], (g.size, 1))
+    a1, b1 = g.reshape(-1, 1) * a0, g.reshape(-1, 1) * b0
+    x = np.column_stack([c * (1 + t.reshape(-1) * (g.reshape(-1) - 1)), np.zeros(g.size)])
+    return np.min([_ratio_from_angles(*tri) for tri in
+                   ((a0, b0, x), (b0, b1, x), (b1, a1, x), (a1, a0, x))], axis=0)
+
+
+@given(st.floats(math.radians(26.2), math.radians(40)))
+@budget(30)
+def test_the_ladder_is_the_best_one_and_taken_where_it_beats_the_zigzag(theta):
+    G, T = np.meshgrid(np.linspace(1.05, 3.0, 400), np.linspace(0.01, 0.99, 200))
+    best = float(_ladder_layer_oracle(theta, G, T).max())
+    g, t, wanted = (float(v) for v in ladder_parameters(theta))
+    got = float(_ladder_layer_oracle(theta, g, t)[0])
+    assert got >= best - 2e-3  # the grid's step; the table is interpolated
+    isosceles = 8 * math.sin(theta / 2) * math.sin((math.pi - theta) / 4) ** 2
+    ladder = min(got, isosceles)
+    zig, corner = _zigzag_and_corner(theta, GRID)
+    zigzag = float(np.minimum(zig, corner).max())
+    if wanted:
+        assert ladder >= zigzag - 2e-3
+    else:
+        assert zigzag >= ladder - 2e-3
+
+
 def _kite(theta, length=3.0):
     """A kite with a corner of angle theta at the origin, its other corners blunt."""
     tip = (length * (1 + 0.3 * math.sin(theta / 2)), 0.5 * length * math.tan(theta / 2))
@@ -67,11 +108,16 @@ def _kite(theta, length=3.0):
 
 def _expected_distances(theta, h, length, offset):
     """The graded nodes' distances from the corner (module docstring), rebuilt,
-    on a wall whose far end is blunt: nodes while the next one is on the wall."""
-    q, out, k = float(zigzag_ratio(theta)), [], 0
+    on a wall whose far end is blunt: nodes while the next one is on the wall,
+    a zigzag's while its spacing is below h, a ladder's (in phase: no offset)
+    while the wedge is narrower than LADDER_WIDTH h."""
+    g, _, ladder = (float(v) for v in ladder_parameters(theta))
+    q, out, k = g if ladder else float(zigzag_ratio(theta)), [], 0
+    offset = 0.0 if ladder else offset
     while k < MAX_PER_WALL:
         d = h * q ** (k + offset)
-        if d * q > length or (q - 1) * d > h:
+        wide = 2 * math.sin(theta / 2) * d > LADDER_WIDTH * h if ladder else (q - 1) * d > h
+        if d * q > length or wide:
             break
         out.append(d)
         k += 1
@@ -81,7 +127,7 @@ def _expected_distances(theta, h, length, offset):
 # walls of 3 end where the spacing reaches h; walls of 1 at 5 and 12 degrees run past
 # their middle (their far ends are blunt)
 @pytest.mark.parametrize("length", [3.0, 1.0])
-@pytest.mark.parametrize("degrees", [5, 12, 20, 30, 38])
+@pytest.mark.parametrize("degrees", [5, 12, 20, 27, 30, 38])
 def test_walls_of_a_sharp_corner_are_graded_by_the_rule(degrees, length):
     theta, h = math.radians(degrees), 0.1
     loops = _kite(theta, length)
@@ -100,9 +146,9 @@ def test_walls_of_a_sharp_corner_are_graded_by_the_rule(degrees, length):
 
 
 def test_short_walls_each_get_their_first_node():
-    # walls cut at 0.1 by the input next to a 30-degree corner, h = 0.05: the
+    # walls cut at 0.1 by the input next to a 36-degree corner, h = 0.05: the
     # half-step wall's first node must fit in its first half too, so r shrinks
-    theta, h, cut = math.radians(30), 0.05, 0.1
+    theta, h, cut = math.radians(36), 0.05, 0.1
     kite = _kite(theta)[0]
     loop = np.array([kite[0], (cut, 0.0), *kite[1:], cut * np.array(kite[3]) / 3.0])
     result = refine_boundary([loop], h, sharp_angle=GRADE_ANGLE)
@@ -135,7 +181,7 @@ def _off_corner_minimum(mesh):
 
 
 @pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
-@pytest.mark.parametrize("degrees", [5, 10, 15, 20, 25, 30, 34, 38])
+@pytest.mark.parametrize("degrees", [5, 10, 15, 20, 25, 26.5, 27.4, 30, 34, 38])
 # the finer share is minutes as plain Python; the jitted environments run it
 @pytest.mark.parametrize("share", [100, pytest.param(1000, marks=pytest.mark.heavy)])
 def test_meshes_beside_sharp_corners_stay_above_0_7(degrees, share):
@@ -146,6 +192,70 @@ def test_meshes_beside_sharp_corners_stay_above_0_7(degrees, share):
     assert off_corner >= 0.7
     if degrees >= math.degrees(SHARP_ANGLE):
         assert overall >= 0.7
+
+
+def _ladder_nodes(mesh):
+    """The nodes bm.mesh added as free points of its refined domain."""
+    domain = mesh.domain
+    on_loops = np.concatenate(domain.loops)
+    free = np.setdiff1d(np.arange(len(domain.points)), on_loops)
+    return np.asarray(domain.points)[free]
+
+
+@pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
+@pytest.mark.parametrize("degrees", [26.5, 30])
+def test_a_ladder_corner_has_an_isosceles_triangle_and_nodes_on_its_bisector(degrees):
+    theta = math.radians(degrees)
+    domain = bm.Domain.from_loops(_kite(theta))
+    mesh = bm.mesh(domain, max_area=domain.area / 300)
+    check_valid(mesh.points, mesh.triangles, mesh.neighbors)
+    rungs = _ladder_nodes(mesh)
+    assert len(rungs) >= 1
+    bisector = np.array([math.cos(theta / 2), math.sin(theta / 2)])
+    np.testing.assert_allclose(rungs @ np.array([-bisector[1], bisector[0]]), 0.0, atol=1e-12)
+    corner = np.flatnonzero((mesh.points == 0.0).all(axis=1))
+    assert len(corner) == 1
+    at_corner = mesh.triangles[(mesh.triangles == corner[0]).any(axis=1)]
+    assert len(at_corner) == 1  # the corner's own triangle, isosceles
+    legs = np.sort(np.hypot(*mesh.points[at_corner[0]].T))[1:]
+    assert legs[0] == pytest.approx(legs[1], rel=1e-9)
+    assert _off_corner_minimum(mesh)[1] >= 0.7
+
+
+@pytest.mark.parametrize("obstacle", ["point", "hole"])
+def test_a_ladder_stops_short_of_what_lies_in_its_wedge(obstacle):
+    # a free point or a small hole on the bisector of a 30-degree corner, 0.3
+    # from it, where a ladder of h = 0.5 would run to 1.2: no rung and no graded
+    # wall node beyond it
+    theta = math.radians(30)
+    kite = _kite(theta)[0]
+    u = np.array([math.cos(theta / 2), math.sin(theta / 2)])
+    if obstacle == "point":
+        domain = bm.Domain.from_pslg(loops=[kite], points=[0.3 * u])
+    else:
+        square = 0.3 * u + 0.01 * np.array([(0, 0), (1, 0), (1, 1), (0, 1)])
+        domain = bm.Domain.from_loops([kite, square])
+    def h(p):
+        return np.full(len(p), 0.5)
+
+    rungs = ladder_points(domain, h, GRADE_ANGLE)
+    assert 1 <= len(rungs) and np.all(np.hypot(*rungs.T) < 0.3)
+    loop = refine_boundary(domain, h, sharp_angle=GRADE_ANGLE).loops[0]
+    near = np.sort(np.hypot(*loop.T))[1:5]  # two on each wall, in phase, before it
+    assert near[3] < 0.3 and near[1] == pytest.approx(near[0]) and near[3] == pytest.approx(near[2])
+    # without an obstacle the same ladder runs past it
+    assert np.hypot(*ladder_points(bm.Domain.from_loops([kite]), h, GRADE_ANGLE).T).max() > 0.3
+
+
+def test_a_sampled_shapely_domain_gets_no_ladder_nodes():
+    # Domain.from_shapely(size=...) splits segments only: a 30-degree corner keeps
+    # its zigzag (walls out of phase) and no node lies off the segments
+    shapely = pytest.importorskip("shapely")
+    theta = math.radians(30)
+    domain = bm.Domain.from_shapely(shapely.Polygon(_kite(theta)[0]), size=0.1)
+    assert len(domain.points) == sum(len(loop) for loop in domain.loops)
+    near = np.sort(np.hypot(*np.asarray(domain.points).T))[1:3]
+    assert near[1] / near[0] == pytest.approx(math.sqrt(float(zigzag_ratio(theta))), rel=1e-6)
 
 
 @pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
