@@ -28,8 +28,10 @@ corner's triangle isosceles), ratio g, and one node per layer on the bisector
 (:func:`ladder_points`, fixed like the walls' nodes), so that each layer
 between distances d and g d is four triangles around it; g and the node's
 place maximise their worst ratio (0.79 at 26.5 degrees).  A ladder runs while
-the wedge is narrower than LADDER_WIDTH h, on both walls alike and short of
-anything else in its wedge; one without a whole layer is a zigzag again.
+the wedge is narrower than LADDER_WIDTH h, on both walls alike; one without a
+whole layer, or that would stop at a wall's far end or at anything else in its
+wedge rather than where the wedge widens, is a zigzag again (its last layer
+would meet the field's long pieces).
 """
 
 from __future__ import annotations
@@ -268,23 +270,27 @@ def _progressions(a, b, node_a, node_b, theta, size, below, free, ladder_walls):
     ladder = (ladder_parameters(theta[node])[2] & (_walls_at(node, far) == 2)
               & _all_at(node, np.asarray(ladder_walls, bool)[seg]))
     clearance = _clearance(corner, node, a, b, node_a, node_b, free, ladder)
-    walls = _Walls(seg, at_start, node, corner, away, *_graded(
-        theta, size, below, node, far, corner, away, ladder, clearance))
-    # a ladder needs a layer, two nodes on each wall: else the zigzag
-    empty = walls.ladder & (walls.fits.sum(axis=1) < 2)
-    if not empty.any():
+    *graded, open_end = _graded(theta, size, below, node, far, corner, away, ladder, clearance)
+    walls = _Walls(seg, at_start, node, corner, away, *graded)
+    # a ladder needs a layer, two nodes on each wall, and room past its last one (it
+    # stops where the wedge is wide, not at a wall's end or an obstacle): else the zigzag
+    unfit = walls.ladder & ((walls.fits.sum(axis=1) < 2) | ~open_end)
+    if not unfit.any():
         return walls
     at = np.unique(node, return_inverse=True)[1]
     dropped = np.zeros(at.max() + 1, bool)
-    dropped[at[empty]] = True
+    dropped[at[unfit]] = True
     ladder &= ~dropped[at]
-    return _Walls(seg, at_start, node, corner, away, *_graded(
-        theta, size, below, node, far, corner, away, ladder, clearance))
+    graded = _graded(theta, size, below, node, far, corner, away, ladder, clearance)[:-1]
+    return _Walls(seg, at_start, node, corner, away, *graded)
 
 
 def _graded(theta, size, below, node, far, corner, away, ladder, clearance):
     """The rest of :class:`_Walls` for the wall ends of :func:`_progressions`
-    (``away`` from the corner along the wall), with the ``ladder`` mask."""
+    (``away`` from the corner along the wall), with the ``ladder`` mask, and
+    per wall end whether its first node not kept is short of the wall's far
+    end (or past the middle of a wall graded from both ends) and of the
+    clearance."""
     length = np.hypot(away[:, 0], away[:, 1])
     # a wall graded from both ends is shared at its middle; else the progression may run
     # on while its next node still lies on the wall
@@ -318,7 +324,14 @@ def _graded(theta, size, below, node, far, corner, away, ladder, clearance):
     fits = np.logical_and.accumulate(inside & (wide <= h), axis=1)
     if ladder.any():
         fits = _ladder_fits(fits, ladder, at, dist, clearance)
-    return ladder, q, u, fits, where, dist, (q[:, None] - 1.0) * dist
+    count = fits.sum(axis=1)
+    after = np.minimum(count, MAX_PER_WALL - 1)[:, None]
+    # closed: the next node would pass a wall's far end (not the middle of a wall the
+    # other corner grades too) or the clearance
+    middle = shared[:, None] & (u > 0.5)
+    closed = ~middle & ((u * q[:, None] > 1.0) | (dist >= clearance[:, None]))
+    open_end = (count == MAX_PER_WALL) | ~np.take_along_axis(closed, after, axis=1)[:, 0]
+    return ladder, q, u, fits, where, dist, (q[:, None] - 1.0) * dist, open_end
 
 
 def _walls_at(node, far):

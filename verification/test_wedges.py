@@ -223,10 +223,10 @@ def test_a_ladder_corner_has_an_isosceles_triangle_and_nodes_on_its_bisector(deg
 
 
 @pytest.mark.parametrize("obstacle", ["point", "hole"])
-def test_a_ladder_stops_short_of_what_lies_in_its_wedge(obstacle):
+def test_a_ladder_that_would_reach_what_lies_in_its_wedge_is_a_zigzag(obstacle):
     # a free point or a small hole on the bisector of a 30-degree corner, 0.3
-    # from it, where a ladder of h = 0.5 would run to 1.2: no rung and no graded
-    # wall node beyond it
+    # from it, where a ladder of h = 0.5 would run to 1.2: no rung, the walls
+    # out of phase (the zigzag's half step)
     theta = math.radians(30)
     kite = _kite(theta)[0]
     u = np.array([math.cos(theta / 2), math.sin(theta / 2)])
@@ -235,16 +235,38 @@ def test_a_ladder_stops_short_of_what_lies_in_its_wedge(obstacle):
     else:
         square = 0.3 * u + 0.01 * np.array([(0, 0), (1, 0), (1, 1), (0, 1)])
         domain = bm.Domain.from_loops([kite, square])
+
     def h(p):
         return np.full(len(p), 0.5)
 
-    rungs = ladder_points(domain, h, GRADE_ANGLE)
-    assert 1 <= len(rungs) and np.all(np.hypot(*rungs.T) < 0.3)
+    assert len(ladder_points(domain, h, GRADE_ANGLE)) == 0
     loop = refine_boundary(domain, h, sharp_angle=GRADE_ANGLE).loops[0]
-    near = np.sort(np.hypot(*loop.T))[1:5]  # two on each wall, in phase, before it
-    assert near[3] < 0.3 and near[1] == pytest.approx(near[0]) and near[3] == pytest.approx(near[2])
-    # without an obstacle the same ladder runs past it
+    near = np.sort(np.hypot(*loop.T))[1:3]
+    assert near[1] / near[0] == pytest.approx(math.sqrt(float(zigzag_ratio(theta))), rel=1e-6)
+    # without an obstacle the same corner's ladder runs past it
     assert np.hypot(*ladder_points(bm.Domain.from_loops([kite]), h, GRADE_ANGLE).T).max() > 0.3
+
+
+def _star(tips, degrees):
+    """A star of ``tips`` tips of the given angle on the unit circle."""
+    half, phi = math.radians(degrees) / 2, math.pi / tips
+    inner = math.sin(half) / math.sin(half + phi)
+    out = []
+    for k in range(tips):
+        t = 2 * math.pi * k / tips
+        out += [(math.cos(t), math.sin(t)), (inner * math.cos(t + phi), inner * math.sin(t + phi))]
+    return np.array(out)
+
+
+@pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
+def test_short_tips_keep_the_zigzag_where_a_ladder_would_end_at_their_walls():
+    # 40 tips of 30 degrees, 0.23 long, at an h of 0.24: a ladder would stop at the
+    # wall's end and leave 0.43 beside it; the zigzag keeps every element >= 0.7
+    domain = bm.Domain.from_loops([_star(40, 30)])
+    mesh = bm.mesh(domain, max_area=domain.area / 100)
+    check_valid(mesh.points, mesh.triangles, mesh.neighbors)
+    assert len(_ladder_nodes(mesh)) == 0
+    assert _off_corner_minimum(mesh)[1] >= 0.7
 
 
 def test_a_sampled_shapely_domain_gets_no_ladder_nodes():
