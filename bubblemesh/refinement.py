@@ -155,7 +155,7 @@ def _graph_domain(refined: RefinedBoundary, source: Domain, marks, interior) -> 
 
 def refine_boundary(
     domain_or_loops, h, *, resolution: float = 0.125, max_nodes: int = MAX_SOURCES,
-    sharp_angle: float = 0.0, rounding: str = "up", splits=None, ladders: bool = True,
+    sharp_angle: float = 0.0, rounding: str = "up", splits=None, ladders: bool = False,
 ) -> RefinedBoundary:
     """Split the boundary segments to the size ``h`` (a :class:`SizeField`, a
     positive number or a vectorised callable (n, 2) -> (n,)).
@@ -164,9 +164,10 @@ def refine_boundary(
     :meth:`Domain.from_loops` takes them (validated, kept in the given order).
     The walls of corners sharper than ``sharp_angle`` (radians) get nodes in
     geometric progression from the corner (:mod:`bubblemesh._wedges`), the
-    rest of them the nodes above; ``ladders=False`` keeps every such corner a
-    zigzag (a ladder's walls need its free nodes, which
-    :func:`~bubblemesh._wedges.ladder_points` gives).  ``rounding="nearest"`` takes n = round(I)
+    rest of them the nodes above, every one a zigzag unless ``ladders``: then
+    a corner that holds a ladder gets its in-phase walls, whose rungs, free
+    nodes, :func:`~bubblemesh._wedges.ladder_points` gives (walls without
+    their rungs leave 0.68 trapezoids).  ``rounding="nearest"`` takes n = round(I)
     pieces instead of ceil(I) (at least ceil(I / NEAREST_CAP)): pieces up to
     NEAREST_CAP h, but on average as long as h, so the first row of elements
     along a wall is as dense as the field, not up to twice as dense.

@@ -106,12 +106,13 @@ def _kite(theta, length=3.0):
                       (length * math.cos(theta), length * math.sin(theta))])]
 
 
-def _expected_distances(theta, h, length, offset):
+def _expected_distances(theta, h, length, offset, ladders):
     """The graded nodes' distances from the corner (module docstring), rebuilt,
     on a wall whose far end is blunt: nodes while the next one is on the wall,
     a zigzag's while its spacing is below h, a ladder's (in phase: no offset)
-    while the wedge is narrower than LADDER_WIDTH h."""
-    g, _, ladder = (float(v) for v in ladder_parameters(theta))
+    while the wedge is narrower than LADDER_WIDTH h, if ``ladders``."""
+    g, _, wanted = (float(v) for v in ladder_parameters(theta))
+    ladder = ladders and bool(wanted)
     q, out, k = g if ladder else float(zigzag_ratio(theta)), [], 0
     offset = 0.0 if ladder else offset
     while k < MAX_PER_WALL:
@@ -126,17 +127,22 @@ def _expected_distances(theta, h, length, offset):
 
 # walls of 3 end where the spacing reaches h; walls of 1 at 5 and 12 degrees run past
 # their middle (their far ends are blunt)
+# (at 27 and 30 degrees a ladder's in-phase walls only if asked for)
+@pytest.mark.parametrize("ladders", [True, False])
 @pytest.mark.parametrize("length", [3.0, 1.0])
 @pytest.mark.parametrize("degrees", [5, 12, 20, 27, 30, 38])
-def test_walls_of_a_sharp_corner_are_graded_by_the_rule(degrees, length):
+def test_walls_of_a_sharp_corner_are_graded_by_the_rule(degrees, length, ladders):
     theta, h = math.radians(degrees), 0.1
     loops = _kite(theta, length)
-    result = refine_boundary(loops, h, sharp_angle=GRADE_ANGLE)
+    result = refine_boundary(loops, h, sharp_angle=GRADE_ANGLE, ladders=ladders)
     check_refinement([np.asarray(loops[0])], result)
     loop = result.loops[0]
+    if not ladders:  # the default: a direct caller has no rungs for in-phase walls
+        np.testing.assert_array_equal(
+            refine_boundary(loops, h, sharp_angle=GRADE_ANGLE).loops[0], loop)
     out_wall = np.hypot(*loop[1:result.input_index[0][1]].T)  # corner -> (3, 0)
     in_wall = np.hypot(*loop[result.input_index[0][3] + 1:][::-1].T)  # corner -> the 4th node
-    expected = [_expected_distances(theta, h, length, s) for s in (0.0, 0.5)]
+    expected = [_expected_distances(theta, h, length, s, ladders) for s in (0.0, 0.5)]
     assert len(expected[0]) >= 1
     got = sorted((out_wall, in_wall), key=lambda w: w[0])  # the half-step wall starts farther
     for wall, want in zip(got, expected):
@@ -240,7 +246,7 @@ def test_a_ladder_that_would_reach_what_lies_in_its_wedge_is_a_zigzag(obstacle):
         return np.full(len(p), 0.5)
 
     assert len(ladder_points(domain, h, GRADE_ANGLE)) == 0
-    loop = refine_boundary(domain, h, sharp_angle=GRADE_ANGLE).loops[0]
+    loop = refine_boundary(domain, h, sharp_angle=GRADE_ANGLE, ladders=True).loops[0]
     near = np.sort(np.hypot(*loop.T))[1:3]
     assert near[1] / near[0] == pytest.approx(math.sqrt(float(zigzag_ratio(theta))), rel=1e-6)
     # without an obstacle the same corner's ladder runs past it
