@@ -62,7 +62,13 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    (:func:`~bubblemesh.sizing.field_count`), then a higher mean with no lower
    minimum, means within MEAN_TIE ranked by their minimum): on small
    domains either insertion can win by where its seams fall, and where walls
-   dominate the seeds' first row can overshoot the field's count.  A
+   dominate the seeds' first row can overshoot the field's count.  One of
+   the other two that overshoots the count by more than COUNT_TOL is made
+   again on the user's sizes scaled to bring it back (:func:`_matched`: a
+   front fills a narrow strip two rows deep, more than the field's integral,
+   and coarsens the rest to pay for it, as Gmsh tuned to a count does),
+   under the user's area bounds, and taken if it ranks better the same way
+   with a mean at least as high (within MEAN_TIE).  A
    channel's mesh of at most CHANNEL_BOTH_BELOW elements is made again on the
    plain walls, and kept only if better the same way.  A mesh of at most
    STEEPER_BELOW elements with more than COUNT_AIM over the field's count
@@ -315,18 +321,26 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
                    smoothing_sweeps=int(smoothing_sweeps))
     run = dict(insertion=insertion, notes=notes, max_area=max_area, progress=progress,
                clock=clock, options=options)
-    mesh = _chosen(domain, field, channel, fine, **run)
+
+    def rescaled(scale):
+        if _with_regions(domain, _user_size(size, max_area)) is None:
+            return None  # the input alone sets the field: nothing to scale
+        return _sized(domain, size, max_area, gradation, scale)
+
+    mesh = _chosen(domain, field, channel, fine, rescaled=rescaled, **run)
     steeper = _steeper_gradation(domain, size, max_area, field, mesh)
     if steeper is not None:
-        other = _chosen(domain, *_sized(domain, size, max_area, steeper), **run)
+        s_field, s_channel, s_fine = _sized(domain, size, max_area, steeper)
+        other = _chosen(domain, s_field, s_channel, s_fine, rescaled=None, **run)
         if _better(other, mesh, field_count(field, mesh.points, mesh.triangles)):
             mesh = other
     return _polished(_minmaxed(_swapped(mesh, max_area, field), max_area), max_area)
 
 
-def _sized(domain, size, max_area, gradation):
-    """(size field, straight channel or None, refined domain): step 1."""
-    field = _plain_field(domain, size, max_area, gradation)
+def _sized(domain, size, max_area, gradation, scale=1.0):
+    """(size field, straight channel or None, refined domain): step 1 (the
+    user's sizes times ``scale``)."""
+    field = _plain_field(domain, size, max_area, gradation, scale)
     try:
         _check_scale(domain, field)
         channel = straight_channel(domain, field, float(field.cap))
@@ -349,19 +363,30 @@ def size_field(domain, *, size=None, max_area=None, gradation=0.25) -> SizeField
     return _with_wedges(domain, _plain_field(domain, size, max_area, gradation))
 
 
-def _plain_field(domain, size, max_area, gradation):
-    """The size field of step 1 before the sharp corners' wedges."""
+def _plain_field(domain, size, max_area, gradation, scale=1.0):
+    """The size field of step 1 before the sharp corners' wedges, the user's
+    sizes (``size``, ``max_area``'s and the regions') times ``scale``."""
+    user = _with_regions(domain, _user_size(size, max_area))
+    if scale != 1.0 and user is not None:
+        user = _times(user, scale)
     try:
-        return SizeField.from_domain(domain, size=_with_regions(domain,
-                                                                _user_size(size, max_area)),
-                                     gradation=gradation)
+        return SizeField.from_domain(domain, size=user, gradation=gradation)
     except (TypeError, ValueError) as error:
         raise type(error)(f"mesh: {error}") from None
 
 
+def _times(user, scale):
+    """A user size (a number or a callable) times ``scale``."""
+    if callable(user):
+        return lambda xy: scale * user(xy)
+    return scale * float(user)
+
+
 def _chosen(domain, field, channel, fine, insertion, notes, max_area, progress, clock,
-            options):
-    """The best of the meshes step 4 makes on one size field."""
+            options, rescaled):
+    """The best of the meshes step 4 makes on one size field (and, where
+    ``rescaled`` gives the step 1 of the user's sizes times a factor, on the
+    one that matches an over-full mesh's count to the field's)."""
     frontal = _frontal_wanted(insertion, domain, field)
 
     def portfolio(fine, channel):
@@ -374,6 +399,12 @@ def _chosen(domain, field, channel, fine, insertion, notes, max_area, progress, 
                                    progress, clock, options, channel)
                 if _better(other, mesh, asked):
                     mesh = other
+                elif len(other.triangles) > (1.0 + COUNT_TOL) * asked and rescaled:
+                    other = _matched(domain, other, asked, other_frontal, seeded, rescaled,
+                                     notes, max_area, progress, clock, options)
+                    if other is not None and _better(other, mesh, asked) and _as_good(other,
+                                                                                      mesh):
+                        mesh = other
         return mesh
 
     mesh = portfolio(fine, channel)
@@ -384,6 +415,29 @@ def _chosen(domain, field, channel, fine, insertion, notes, max_area, progress, 
         if not _better(mesh, plain, field_count(field, plain.points, plain.triangles)):
             mesh = plain
     return mesh
+
+
+def _matched(domain, mesh, asked, frontal, seeded, rescaled, notes, max_area, progress,
+             clock, options):
+    """``mesh``'s insertion again on the user's sizes scaled so that the
+    field's count (``asked``) over ``mesh``'s falls by the share ``mesh`` is
+    over it, or None.  A narrow strip filled two rows deep, as fronts fill
+    it, holds more elements than the field's integral (which does not see
+    the rows); Gmsh tuned to the same count coarsens the rest: so does this,
+    under the same area bounds (``max_area``, the user's)."""
+    made = rescaled(math.sqrt(len(mesh.triangles) / asked))
+    if made is None:
+        return None
+    field, channel, fine = made
+    return _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, clock,
+                      options, channel)
+
+
+def _as_good(a, b):
+    """Is mesh a's mean radius ratio (eq. 10) at least b's, to MEAN_TIE?  A
+    mesh made on rescaled sizes must pay for itself in quality: fitting the
+    field's count is no reason to take it."""
+    return bool(a.quality().mean() >= b.quality().mean() - MEAN_TIE)
 
 
 def _steeper_gradation(domain, size, max_area, field, mesh):
