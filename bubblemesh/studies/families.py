@@ -112,6 +112,7 @@ def narrow(n, seed):
             corners = [(0, 0), (length, 0), (length + s, 1), (s, 1)]
         else:
             t = rng.uniform(0.3, 1.5)
+            t = t if 2 * t < length else 0.45 * length  # a top that does not cross itself
             corners = [(0, 0), (length, 0), (length - t, 1), (t, 1)]
         domain = bm.Domain.from_loops([np.array(corners, float)])
         yield (f"narrow {seed}.{i}", domain,
