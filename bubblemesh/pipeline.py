@@ -63,12 +63,13 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    minimum, means within MEAN_TIE ranked by their minimum): on small
    domains either insertion can win by where its seams fall, and where walls
    dominate the seeds' first row can overshoot the field's count.  One of
-   the other two that overshoots the count by more than COUNT_TOL is made
-   again on the user's sizes scaled to bring it back (:func:`_matched`: a
-   front fills a narrow strip two rows deep, more than the field's integral,
-   and coarsens the rest to pay for it, as Gmsh tuned to a count does),
-   under the user's area bounds, and taken if it ranks better the same way
-   with a mean at least as high (within MEAN_TIE).  A
+   the other two with more than BOTH_COUNT more elements than the field's
+   count or the best mesh's, whichever is fewer, is made again on the
+   user's sizes scaled to bring it back to that (:func:`_matched`: a front
+   fills a narrow strip two rows deep, more than the field's integral, and
+   coarsens the rest to pay for it, as Gmsh tuned to a count does), under
+   the user's area bounds, and taken if it ranks better the same way with a
+   mean at least as high (within MEAN_TIE).  A
    channel's mesh of at most CHANNEL_BOTH_BELOW elements is made again on the
    plain walls, and kept only if better the same way.  A mesh of at most
    STEEPER_BELOW elements with more than COUNT_AIM over the field's count
@@ -386,7 +387,8 @@ def _chosen(domain, field, channel, fine, insertion, notes, max_area, progress, 
             options, rescaled):
     """The best of the meshes step 4 makes on one size field (and, where
     ``rescaled`` gives the step 1 of the user's sizes times a factor, on the
-    one that matches an over-full mesh's count to the field's)."""
+    one that brings an over-full mesh's count back to the field's or the
+    best mesh's, whichever is fewer)."""
     frontal = _frontal_wanted(insertion, domain, field)
 
     def portfolio(fine, channel):
@@ -397,13 +399,14 @@ def _chosen(domain, field, channel, fine, insertion, notes, max_area, progress, 
             for other_frontal, seeded in OTHERS:
                 other = _mesh_with(domain, fine, field, other_frontal, seeded, notes, max_area,
                                    progress, clock, options, channel)
+                goal = min(asked, len(mesh.triangles))  # the count it must not exceed
                 if _better(other, mesh, asked):
                     mesh = other
-                elif len(other.triangles) > (1.0 + COUNT_TOL) * asked and rescaled:
-                    other = _matched(domain, other, asked, other_frontal, seeded, rescaled,
+                elif len(other.triangles) > (1.0 + BOTH_COUNT) * goal and rescaled:
+                    other = _matched(domain, other, goal, other_frontal, seeded, rescaled,
                                      notes, max_area, progress, clock, options)
-                    if other is not None and _better(other, mesh, asked) and _as_good(other,
-                                                                                      mesh):
+                    if other is not None and _better(other, mesh, asked) and _as_good(
+                            other, mesh):
                         mesh = other
         return mesh
 
@@ -417,15 +420,15 @@ def _chosen(domain, field, channel, fine, insertion, notes, max_area, progress, 
     return mesh
 
 
-def _matched(domain, mesh, asked, frontal, seeded, rescaled, notes, max_area, progress,
+def _matched(domain, mesh, goal, frontal, seeded, rescaled, notes, max_area, progress,
              clock, options):
-    """``mesh``'s insertion again on the user's sizes scaled so that the
-    field's count (``asked``) over ``mesh``'s falls by the share ``mesh`` is
-    over it, or None.  A narrow strip filled two rows deep, as fronts fill
+    """``mesh``'s insertion again on the user's sizes scaled by the share
+    ``mesh`` is over the count ``goal``, so that its count falls to about
+    ``goal``, or None.  A narrow strip filled two rows deep, as fronts fill
     it, holds more elements than the field's integral (which does not see
     the rows); Gmsh tuned to the same count coarsens the rest: so does this,
     under the same area bounds (``max_area``, the user's)."""
-    made = rescaled(math.sqrt(len(mesh.triangles) / asked))
+    made = rescaled(math.sqrt(len(mesh.triangles) / goal))
     if made is None:
         return None
     field, channel, fine = made

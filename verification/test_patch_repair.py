@@ -527,15 +527,16 @@ def test_node_swaps_keep_the_count_and_minimum_and_raise_the_mean(loops, k):
 
 
 @pytest.mark.heavy
-def test_node_swaps_find_a_crowded_node_to_move_in_a_hexagon():
-    """The premise of the swaps: in the regular hexagon at area/500 the mesh
-    without them has a node whose move (one point in, one node out) raises
-    the mean, and the count stays."""
-    hexagon = np.array([(math.cos(a), math.sin(a)) for a in np.arange(6) * math.pi / 3])
-    domain = bm.Domain.from_loops([hexagon])
-    m = _without_swaps(domain, domain.area / 500)
-    field = SizeField.from_domain(domain, size=pipeline._user_size(None, domain.area / 500))
-    s = pipeline._swapped(m, domain.area / 500, field)
+def test_node_swaps_find_a_crowded_node_to_move_in_an_l_shape():
+    """The premise of the swaps: in the shapes study's L-shape at area/300
+    the mesh without them has a node whose move (one point in, one node out)
+    raises the mean, and the count stays."""
+    from bubblemesh.studies.shapes import shapes
+
+    domain = bm.Domain.from_loops(dict(shapes())["L-shape"])
+    m = _without_swaps(domain, domain.area / 300)
+    field = SizeField.from_domain(domain, size=pipeline._user_size(None, domain.area / 300))
+    s = pipeline._swapped(m, domain.area / 300, field)
     assert s.optimization.repairs > m.optimization.repairs and len(s.triangles) == len(
         m.triangles)
     assert O.radius_ratio_reference(s.points, s.triangles).mean() > O.radius_ratio_reference(
