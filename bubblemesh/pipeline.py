@@ -404,7 +404,7 @@ def _chosen(domain, field, channel, fine, insertion, notes, max_area, progress, 
                     mesh = other
                 elif len(other.triangles) > (1.0 + BOTH_COUNT) * goal and rescaled:
                     other = _matched(domain, other, goal, other_frontal, seeded, rescaled,
-                                     notes, max_area, progress, clock, options)
+                                     notes, max_area, progress, clock, options, field)
                     if other is not None and _better(other, mesh, asked) and _as_good(
                             other, mesh):
                         mesh = other
@@ -421,19 +421,20 @@ def _chosen(domain, field, channel, fine, insertion, notes, max_area, progress, 
 
 
 def _matched(domain, mesh, goal, frontal, seeded, rescaled, notes, max_area, progress,
-             clock, options):
+             clock, options, counted):
     """``mesh``'s insertion again on the user's sizes scaled by the share
     ``mesh`` is over the count ``goal``, so that its count falls to about
     ``goal``, or None.  A narrow strip filled two rows deep, as fronts fill
     it, holds more elements than the field's integral (which does not see
     the rows); Gmsh tuned to the same count coarsens the rest: so does this,
-    under the same area bounds (``max_area``, the user's)."""
+    under the same area bounds (``max_area``, the user's), its repairs'
+    count windows those of the asked field ``counted``."""
     made = rescaled(math.sqrt(len(mesh.triangles) / goal))
     if made is None:
         return None
     field, channel, fine = made
     return _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, clock,
-                      options, channel)
+                      options, channel, counted)
 
 
 def _as_good(a, b):
@@ -502,11 +503,12 @@ def _better(a, b, asked):
 
 
 def _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, clock,
-               options, channel=None):
+               options, channel=None, counted=None):
     """§2 by frontal or centroid insertion on the refined domain ``fine`` (with
     ``seeded`` its frontal seeds or lattice, in the ``channel``'s rows where
     there is one), then the stable §3, the area bounds and the relaxed flips
-    (module docstring)."""
+    (module docstring); the repairs keep the count near that of ``counted``
+    (default ``field``)."""
     seeds = (None if not seeded else _lattice(fine, field, domain, channel) if frontal
              else _frontal_seeds(fine))
     try:
@@ -516,7 +518,7 @@ def _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, 
                            "(sizes far finer than the domain)") from None
     if not frontal and _stretched(generated, field):
         return _mesh_with(domain, fine, field, True, True, notes, max_area, progress, clock,
-                          options, channel)
+                          options, channel, counted)
     gen = RobustGenerationStats(
         **{k: getattr(generated.generation, k) for k in GenerationStats.__dataclass_fields__},
         warnings=notes, input_boundary_nodes=len(domain.points),
@@ -541,7 +543,7 @@ def _mesh_with(domain, fine, field, frontal, seeded, notes, max_area, progress, 
 
         # Triangle's -a, global and regional: hard bounds
         return _polished(_repaired(_relaxed(bound_areas(mesh, max_area, settle=settle),
-                                            max_area), max_area, field), max_area)
+                                            max_area), max_area, counted or field), max_area)
     except MemoryError:  # sizes far finer than the domain's extent
         raise MeshingError("mesh: not enough memory to optimise the mesh this size field "
                            "asks for (sizes far finer than the domain)") from None

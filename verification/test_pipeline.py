@@ -642,3 +642,30 @@ def test_slender_teeth_filled_two_rows_deep_keep_the_fields_count(teeth, depth, 
     assert abs(len(gmsh_triangles) / len(m.triangles) - 1) <= 0.03
     ours = O.radius_ratio_reference(np.asarray(m.points), np.asarray(m.triangles)).mean()
     assert ours >= O.radius_ratio_reference(gmsh_points, gmsh_triangles).mean()
+
+
+def test_a_rescaled_mesh_keeps_the_asked_fields_count_windows(monkeypatch):
+    """The comb of eight teeth has its frontal mesh made again on scaled
+    sizes; its repairs and balance still aim at the asked field's count (a
+    balance toward the scaled field's would pull the count below it), so
+    every field the repairs get is the asked one, while one §2 ran on
+    another."""
+    fields, generated = [], []
+    real_repaired, real_generate = pipeline._repaired, pipeline.generate_sized
+
+    def repaired(mesh, max_area, field):
+        fields.append(field)
+        return real_repaired(mesh, max_area, field)
+
+    def generate(fine, field, **kwargs):
+        generated.append(field)
+        return real_generate(fine, field, **kwargs)
+
+    monkeypatch.setattr(pipeline, "_repaired", repaired)
+    monkeypatch.setattr(pipeline, "generate_sized", generate)
+    domain = _comb(8, 0.441)
+    max_area = domain.area / 206
+    bm.mesh(domain, max_area=max_area)
+    asked = pipeline.size_field(domain, max_area=max_area)
+    assert {float(f.cap) for f in generated} != {float(asked.cap)}  # the premise
+    assert {float(f.cap) for f in fields} == {float(asked.cap)}
