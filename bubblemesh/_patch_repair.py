@@ -28,8 +28,10 @@ below 0.7 is this population defect.  So, worst triangle first:
   the first repair, every changed triangle keeps its area bound and the
   element count stays in the window ``counts`` (or comes closer to it).
 
-Rounds stop when the worst triangle is at least ``below``, when no variant of
-the WORST worst triangles pays, or after ``rounds``.  Every round is
+Rounds stop when the worst triangle is at least ``below``, when no variant
+of any triangle below it pays (FAILED triangles tried in vain at most: one
+at a sharp corner cannot be mended, and must not hide the rest), or after
+``rounds``.  Every round is
 deterministic (ties broken by index).
 
 :func:`balance_count` uses the same re-triangulation and relaxation to bring
@@ -48,7 +50,7 @@ from ._smoothing import compass_polish, star_buffer, stars, triangle_quality
 from .errors import GeometryError
 from .triangulation import constrained_delaunay
 
-WORST = 2  # triangles tried per round, worst first
+FAILED = 16  # triangles none of whose variants pays, at most, before the rounds stop
 RISE = 1e-9  # a smaller rise of the smallest ratio is rounding, not a repair
 MEAN_DROP = 1e-3  # the repairs may lower the mesh's mean ratio by at most this in all
 COMPASS_ROUNDS = 3
@@ -71,19 +73,27 @@ def repair_worst(X, T, segments, movable, limit, below, rounds, counts, halvings
     lowest = float(triangle_quality(np.asarray(X, np.float64), np.asarray(T, np.int64)).mean()
                    if len(T) else 1.0) - MEAN_DROP
 
+    failed = set()  # vertex triples none of whose variants paid (nodes keep their numbers)
+
     def pick(X, T, q, ptr, idx, free, limit, walls):
         for t in _worst(q, below):
+            key = tuple(sorted(T[t].tolist()))
+            if key in failed:
+                continue
             best = _best_variant(X, T, q, ptr, idx, int(t), free, limit, walls, halvings,
                                  steps, counts, lowest)
             if best is not None:
                 return best
+            failed.add(key)
+            if len(failed) >= FAILED:
+                break
         return None
 
     return _rounds(X, T, segments, movable, limit, rounds, pick)
 
 
 def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings, steps,
-                  floor=None, shielded=None, by_mean=True):
+                  floor=None, shielded=None, by_mean=True, least=0.0):
     """While the element count is above ``counts`` (low, high), remove the
     free node whose star is most crowded for the size field (smallest summed
     area over the areas ``size`` asks for) that can go, the ``shielded``
@@ -99,7 +109,9 @@ def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings
     smallest ratio) kept, or without ``by_mean`` of the CANDIDATES / 4
     sparsest the other way round.  Either only if that ratio is not below
     the mesh's minimum (or ``floor``, where that is lower: removals may then
-    lower the minimum down to it) and the area bounds hold.  ``size`` maps
+    lower the minimum down to it), nor below ``least`` where the mesh's
+    minimum is (a sharp corner's triangle sets no bar for the rest of the
+    mesh), and the area bounds hold.  ``size`` maps
     (k, 2) points to (k,) sizes; the rest and the result as
     :func:`repair_worst`."""
     count = MEAN_CANDIDATES if by_mean else CANDIDATES
@@ -112,6 +124,7 @@ def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings
             return None
         fill = _areas(X, T) / np.asarray(size(X[T].mean(axis=1)), np.float64) ** 2
         low = float(q.min(initial=1.0)) if floor is None else min(floor, q.min(initial=1.0))
+        low = max(low, least)
         if m > counts[1]:
             crowd = np.bincount(T.ravel(), np.repeat(fill, 3), len(X))
             crowd[~free] = np.inf
@@ -175,14 +188,10 @@ def _rounds(X, T, segments, movable, limit, rounds, pick):
 
 
 def _worst(q, below):
-    """The WORST triangles of smallest ratio below ``below``, worst first
-    (ties by index)."""
-    k = min(WORST, len(q))
-    if not k:
-        return q[:0].astype(np.int64)
-    first = np.argpartition(q, k - 1)[:k]
-    first = first[np.lexsort((first, q[first]))]
-    return first[q[first] < below]
+    """The triangles of smallest ratio below ``below``, worst first (ties by
+    index)."""
+    first = np.flatnonzero(q < below)
+    return first[np.lexsort((first, q[first]))]
 
 
 def _edge_keys(edges):
@@ -367,7 +376,10 @@ def _relax(X, T, q, ptr, idx, patch, made, added, free, limit, halvings, steps,
     Xl = np.vstack([X[nodes[nodes < n]], added[nodes[nodes >= n] - n]])
     Tl = np.searchsorted(nodes, sub)
     mov = _member(nodes, relaxed)
-    before = min(float(q[patch].min()), float(q[old].min(initial=1.0)))
+    # a neighbour none of whose nodes moves keeps its ratio: a sharp corner's
+    # triangle there must not hold the patch to its bound
+    held = np.concatenate([~mov[Tl[:len(old)]].any(axis=1), np.zeros(len(made), np.bool_)])
+    before = min(float(q[patch].min()), float(q[old[~held[:len(old)]]].min(initial=1.0)))
     lptr, lidx = stars(Tl, len(nodes))
     for _ in range(COMPASS_ROUNDS):
         if not compass_polish(Xl, Tl, lptr, lidx, 0, 1.0, mov, 2.0):
@@ -375,12 +387,12 @@ def _relax(X, T, q, ptr, idx, patch, made, added, free, limit, halvings, steps,
     def short(low):  # the rule a kept variant's smallest ratio must pass
         return low <= before + RISE if floor is None else low < floor
 
-    reached = float(triangle_quality(Xl, Tl).min())
+    reached = float(triangle_quality(Xl, Tl)[~held].min())
     if short(reached):  # the mean sweeps keep it as their floor: they will not lift it
         return None
     _mean_sweeps(Xl, Tl, lptr, lidx, mov, reached, halvings, steps, POLISH_SWEEPS)
     ql = triangle_quality(Xl, Tl)
-    low = float(ql.min())
+    low = float(ql[~held].min())
     if short(low):
         return None
     bound = np.concatenate([limit[old], np.full(len(made), limit[patch].min())])

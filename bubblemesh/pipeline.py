@@ -1045,12 +1045,14 @@ def _repaired_once(mesh, max_area, field, by_mean):
     (:func:`~bubblemesh.sizing.field_count`) and BALANCE_OPS nodes can bring
     it into that window (it is at most BALANCE_SHARE of that count outside),
     a node is removed where the mesh is most crowded (inserted where it is
-    sparsest) without lowering its minimum.  Then the patches around the
-    worst triangles are re-triangulated with one or two points inserted or a
-    node removed where that raises their smallest ratio, the count within
-    REPAIR_WINDOW of the field's or brought closer to it (first, for those
-    below POOR_RATIO where no balance follows, within REPAIR_REACH of its
-    own: :func:`_repair_counts`); both within the area bounds.  In meshes of
+    sparsest) without lowering its minimum or taking a triangle below
+    POOR_RATIO (where a sharp corner sets the minimum, that bars nothing).
+    Then the patches around the worst triangles are re-triangulated with
+    one or two points inserted or a node removed where that raises their
+    smallest ratio, the count within REPAIR_WINDOW of the field's or brought
+    closer to it (first, for those below POOR_RATIO where no balance
+    follows, within REPAIR_REACH of its own: :func:`_repair_counts`); both
+    within the area bounds.  In meshes of
     at most BALANCE_BELOW elements the repair then goes on with the count
     free to go REPAIR_SPARE nodes further (a node inserted where a corner or
     a row lacks one), is balanced back into BALANCE_WINDOW
@@ -1097,7 +1099,7 @@ def _repaired_once(mesh, max_area, field, by_mean):
     if off:
         shielded = _fine_walls_first_row(X, T, segments, field) if by_mean else None
         run(balance_count, window(BALANCE_WINDOW), field, BALANCE_OPS, MEAN_HALVINGS,
-            MEAN_STEPS, None, shielded, by_mean)
+            MEAN_STEPS, None, shielded, by_mean, POOR_RATIO)
     if poor:
         before = len(T)
         if triangle_quality(X, T).min(initial=1.0) < POOR_RATIO:
@@ -1151,12 +1153,13 @@ def _swapped(mesh, max_area, field):
     elements: a point inserted where the count balance would insert one,
     then a node removed where it would remove one
     (:func:`~bubblemesh._patch_repair.balance_count`, both ranked by the
-    mesh mean they leave, neither lowering the mesh's minimum, both within
-    the area bounds), the pair kept if the mesh mean rises by more than
-    SWAP_GAIN; SWAP_ROUNDS pairs at most, the first that does not pay
-    ends them.  A node moves, in effect, from where the mesh is crowded to
-    where it is sparse, the element count unchanged: the balance and the
-    repair change the count and stop once it is inside their window."""
+    mesh mean they leave, neither lowering the mesh's minimum nor taking a
+    triangle below POOR_RATIO, both within the area bounds), the pair kept
+    if the mesh mean rises by more than SWAP_GAIN; SWAP_ROUNDS pairs at
+    most, the first that does not pay ends them.  A node moves, in effect,
+    from where the mesh is crowded to where it is sparse, the element count
+    unchanged: the balance and the repair change the count and stop once it
+    is inside their window."""
     X, T = mesh.points, mesh.triangles
     if not SWAP_ROUNDS or len(T) > BALANCE_BELOW:
         return mesh
@@ -1170,7 +1173,7 @@ def _swapped(mesh, max_area, field):
             movable[np.unique(segments)] = False
             limit = triangle_limits(Y, U, M, regions, max_area) / (1.0 + AREA_MARGIN)
             Y, U, now, taken = balance_count(Y, U, segments, movable, limit, counts, field, 1,
-                                             MEAN_HALVINGS, MEAN_STEPS)
+                                             MEAN_HALVINGS, MEAN_STEPS, least=POOR_RATIO)
             if not taken:
                 break
             kept = np.where(now >= 0, kept[np.maximum(now, 0)], -1)

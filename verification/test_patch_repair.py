@@ -2,13 +2,15 @@
 the last step of bm.mesh: validity, conformity, fixed boundary nodes, the
 smallest ratio strictly up with every kept variant, the mean down by at most
 the MEAN_DROP budget in all, the area bounds and the count window, same bits
-on a second run; a node put into a perfect lattice taken out again, and a gap
-one triangle high given nodes.
+on a second run; a node put into a perfect lattice taken out again (also
+behind worse triangles no variant can mend, beside it and elsewhere), and a
+gap one triangle high given nodes.
 The count balance before it: the count moved two triangles per node toward
 its window and never past it, the minimum never lowered, the most crowded
 node the one removed (off the walls' first row when none there can go: a
 gear's corners).  The node swaps after both: the count and the minimum kept,
-the mean up by the gain each swap must bring.
+the mean up by the gain each swap must bring, no triangle taken below 0.7
+where a sharp fold sets the minimum.
 
 Oracles: verification/oracles.py (exact orientation and conformity, the radius
 ratio from the classical formulas), numpy areas and valence counts."""
@@ -16,6 +18,7 @@ ratio from the classical formulas), numpy areas and valence counts."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import oracles as O
@@ -172,6 +175,40 @@ def test_a_node_put_into_a_perfect_lattice_is_taken_out():
     np.testing.assert_allclose(O.radius_ratio_reference(Y, t), 1.0, atol=1e-9)
     valence = np.bincount(t.ravel(), minlength=len(Y))
     assert np.all(valence[n_b:] == 6)
+    O.check_valid(Y, t)
+
+
+def test_triangles_no_variant_can_mend_do_not_hide_the_rest():
+    """The lattice with a centroid node, and two 10-degree spikes on its
+    outline (isosceles triangles of three wall nodes, each the best any
+    triangle at that apex can be): worse than the centroid node's 0.464
+    triangles, and no variant can raise them.  The repair must go past them,
+    take the node out and give back the lattice, the spikes as they were."""
+    X, tri, segments, n_b, n = _lattice_with_centroid_node()
+    tip = math.radians(10.0)
+    segments, spikes = [tuple(s) for s in segments], []
+    for k in (0, 8):  # two edges of the outline, far apart
+        a, b = segments[k]
+        mid, edge = 0.5 * (X[a] + X[b]), X[b] - X[a]
+        out = np.array([edge[1], -edge[0]]) / np.hypot(*edge)  # right of a CCW outline
+        X = np.vstack([X, mid + out * 0.5 * np.hypot(*edge) / math.tan(tip / 2)])
+        spikes.append((a, len(X) - 1, b))
+        segments[k] = None
+        segments += [(a, len(X) - 1), (len(X) - 1, b)]
+    segments = np.array([s for s in segments if s is not None])
+    tri = np.vstack([tri, spikes])
+    O.check_valid(X, tri)
+    q0 = O.radius_ratio_reference(X, tri)
+    worst = np.sort(q0)
+    assert worst[1] < worst[2] and np.isclose(worst[2], 0.4641, atol=1e-4)  # spikes first
+    assert np.allclose(worst[:2], 8 * math.sin(tip / 2) * math.sin((math.pi - tip) / 4) ** 2)
+    Y, t, old, ops = _repair(X, tri, segments, n_b, np.full(len(tri), np.inf), below=0.7)
+    assert ops >= 1 and len(Y) == len(X) - 1 and not np.isin(n, old)
+    q = O.radius_ratio_reference(Y, t)
+    spiky = np.isin(old[t], [s[1] for s in spikes]).any(axis=1)
+    assert spiky.sum() == 2
+    np.testing.assert_allclose(q[~spiky], 1.0, atol=1e-9)
+    np.testing.assert_allclose(q[spiky], worst[:2], rtol=1e-12)
     O.check_valid(Y, t)
 
 
@@ -578,3 +615,26 @@ def test_a_count_past_the_window_still_lets_the_repair_insert(monkeypatch):
     O.check_valid(repaired.points, repaired.triangles, repaired.neighbors)
     O.check_conforming(repaired.points, repaired.triangles, repaired.segments,
                        area=domain.area, rel=1e-9)
+
+
+@pytest.mark.heavy
+def test_node_swaps_take_no_triangle_below_0_7_where_a_corner_sets_the_minimum(monkeypatch):
+    """Triangle's la.poly at area/1000: the mesh's minimum (0.12) is at a
+    4-degree fold, so "not below the minimum" bars nothing.  The swaps must
+    still leave no more triangles below POOR_RATIO than they found."""
+    triangle = pytest.importorskip("triangle")
+    domain = bm.Domain.from_poly(Path(triangle.__file__).parent / "data" / "la.poly")
+    seen, real = [], pipeline._swapped
+
+    def spy(mesh, max_area, field):
+        seen.append((mesh, real(mesh, max_area, field)))
+        return seen[-1][1]
+
+    monkeypatch.setattr(pipeline, "_swapped", spy)
+    with pytest.warns(bm.QualityWarning):
+        bm.mesh(domain, max_area=domain.area / 1000)
+    [(before, after)] = seen
+    q0 = O.radius_ratio_reference(before.points, before.triangles)
+    q1 = O.radius_ratio_reference(after.points, after.triangles)
+    assert q0.min() < 0.2 and (q0 < pipeline.POOR_RATIO).sum() > 0
+    assert (q1 < pipeline.POOR_RATIO).sum() <= (q0 < pipeline.POOR_RATIO).sum()

@@ -617,12 +617,12 @@ def test_slender_teeth_filled_two_rows_deep_keep_the_fields_count(teeth, depth, 
     """A comb of nine teeth 1.18 tall, 0.11 wide at their base, at area / 493:
     a front fills each tooth's base two rows deep, which holds about 8% more
     elements than the field's integral (it does not see the rows), so the
-    portfolio would pass that mesh over; so with eight teeth 0.44 tall at
-    area / 206, 3% more than the centroid mesh.  bm.mesh makes it again on
-    the user's sizes scaled to the count, as Gmsh tuned to a count coarsens
-    the rest: the count within 5% of the field's (the quality study's
-    adaptive integral), every triangle within max_area (fsum areas), valid
-    and conforming, and the mean radius ratio at least Gmsh
+    portfolio would pass that mesh over.  bm.mesh makes it again on the
+    user's sizes scaled to the count, as Gmsh tuned to a count coarsens the
+    rest.  Eight teeth 0.44 tall at area / 206 (the front 2% over the
+    centroid mesh's count) as well: the count within 5% of the field's (the
+    quality study's adaptive integral), every triangle within max_area (fsum
+    areas), valid and conforming, and the mean radius ratio at least Gmsh
     Frontal-Delaunay's on the same boundary nodes at the same count (0.9705
     against 0.978 and 0.9614 against 0.9624 before)."""
     from bubblemesh.studies import quality as Q
@@ -645,7 +645,7 @@ def test_slender_teeth_filled_two_rows_deep_keep_the_fields_count(teeth, depth, 
 
 
 def test_a_rescaled_mesh_keeps_the_asked_fields_count_windows(monkeypatch):
-    """The comb of eight teeth has its frontal mesh made again on scaled
+    """The comb of nine teeth has its frontal mesh made again on scaled
     sizes; its repairs and balance still aim at the asked field's count (a
     balance toward the scaled field's would pull the count below it), so
     every field the repairs get is the asked one, while one §2 ran on
@@ -663,8 +663,8 @@ def test_a_rescaled_mesh_keeps_the_asked_fields_count_windows(monkeypatch):
 
     monkeypatch.setattr(pipeline, "_repaired", repaired)
     monkeypatch.setattr(pipeline, "generate_sized", generate)
-    domain = _comb(8, 0.441)
-    max_area = domain.area / 206
+    domain = _comb(9, 1.18)
+    max_area = domain.area / 493
     bm.mesh(domain, max_area=max_area)
     asked = pipeline.size_field(domain, max_area=max_area)
     assert {float(f.cap) for f in generated} != {float(asked.cap)}  # the premise
