@@ -54,10 +54,11 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    guarantee: the result's smallest radius ratio is never below the §2
    mesh's; if it were, the nodes of the offending triangles go back to their
    §2 positions, and as a last resort the §2 mesh itself is smoothed.
-4. With ``insertion="auto"`` a domain that takes centroid insertion and
-   gives at most BOTH_BELOW elements is meshed twice more, by frontal
-   insertion and by centroid insertion without the frontal seeds, and the
-   best of the three returned (:func:`_better`: fewest elements below 0.7,
+4. With ``insertion="auto"`` a mesh of at most BOTH_BELOW elements is
+   made twice more: one that took centroid insertion by frontal insertion
+   and by centroid insertion without the frontal seeds, one that took
+   frontal insertion by centroid insertion with and without them; the
+   best of the three is returned (:func:`_better`: fewest elements below 0.7,
    then a count within COUNT_TOL of the size field's
    (:func:`~bubblemesh.sizing.field_count`), then a higher mean with no lower
    minimum, means within MEAN_TIE ranked by their minimum): on small
@@ -76,7 +77,7 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    (walls graded from fine arcs or holes fill with more elements than the
    field's integral, the more the steeper they grade) is made again on the
    gradation whose field asks for that much fewer (:func:`_steeper_gradation`),
-   and kept only if better the same way, judged against the asked field.
+   its three meshes and it judged against the asked field's count.
 5. Corners sharper than :data:`SHARP_ANGLE` (where no triangle can reach a
    radius ratio of 0.7) are reported: a :class:`QualityWarning` and the
    ``warnings`` field of the returned mesh's generation record.
@@ -163,6 +164,7 @@ FINE_WALL = 0.8  # the balance takes nodes last from the first row of walls fine
 BOTH_BELOW, BOTH_COUNT = 5000, 0.03  # both insertions up to this many elements (auto)
 CHANNEL_BOTH_BELOW = 200_000  # a channel's walls and the plain ones both up to this many
 OTHERS = ((True, True), (False, False))  # the other (frontal, seeded) meshes tried then
+FRONTAL_OTHERS = ((False, True), (False, False))  # those where frontal insertion is wanted
 FINAL_SWEEPS, FINAL_BELOW = 10, 20_000  # the last mean polish: sweeps, largest mesh
 MINMAX_ROUNDS = 16  # worst patches moved jointly (_minmax)
 FINAL_TRIES = 3  # runs of it, each holding the nodes of the triangles the last put over bounds
@@ -332,7 +334,7 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
     steeper = _steeper_gradation(domain, size, max_area, field, mesh)
     if steeper is not None:
         s_field, s_channel, s_fine = _sized(domain, size, max_area, steeper)
-        other = _chosen(domain, s_field, s_channel, s_fine, rescaled=None, **run)
+        other = _chosen(domain, s_field, s_channel, s_fine, rescaled=None, counted=field, **run)
         if _better(other, mesh, field_count(field, mesh.points, mesh.triangles)):
             mesh = other
     return _polished(_minmaxed(_swapped(mesh, max_area, field), max_area), max_area)
@@ -384,7 +386,7 @@ def _times(user, scale):
 
 
 def _chosen(domain, field, channel, fine, insertion, notes, max_area, progress, clock,
-            options, rescaled):
+            options, rescaled, counted=None):
     """The best of the meshes step 4 makes on one size field (and, where
     ``rescaled`` gives the step 1 of the user's sizes times a factor, on the
     one that brings an over-full mesh's count back to the field's or the
@@ -394,9 +396,9 @@ def _chosen(domain, field, channel, fine, insertion, notes, max_area, progress, 
     def portfolio(fine, channel):
         mesh = _mesh_with(domain, fine, field, frontal, True, notes, max_area, progress, clock,
                           options, channel)
-        if insertion == "auto" and not frontal and len(mesh.triangles) <= BOTH_BELOW:
-            asked = field_count(field, mesh.points, mesh.triangles)
-            for other_frontal, seeded in OTHERS:
+        if insertion == "auto" and len(mesh.triangles) <= BOTH_BELOW:
+            asked = field_count(counted or field, mesh.points, mesh.triangles)
+            for other_frontal, seeded in (FRONTAL_OTHERS if frontal else OTHERS):
                 other = _mesh_with(domain, fine, field, other_frontal, seeded, notes, max_area,
                                    progress, clock, options, channel)
                 goal = min(asked, len(mesh.triangles))  # the count it must not exceed
@@ -415,7 +417,7 @@ def _chosen(domain, field, channel, fine, insertion, notes, max_area, progress, 
         # where the plain walls' rows nearly fit, their lattice's one seam costs less
         # than stretching every row, and a short channel's corners weigh more: both tried
         plain = portfolio(refined_domain(domain, field), None)
-        if not _better(mesh, plain, field_count(field, plain.points, plain.triangles)):
+        if not _better(mesh, plain, field_count(counted or field, plain.points, plain.triangles)):
             mesh = plain
     return mesh
 

@@ -509,9 +509,11 @@ def test_a_field_graded_off_fine_holes_gets_its_count(monkeypatch):
     The count lands within COUNT_AIM of the field's (the quality study's
     adaptive integral, at the asked gradation), the mesh is valid and
     conforming with the input's nodes kept; without the second mesh the
-    count is past COUNT_AIM, the premise."""
+    count is past COUNT_AIM, the premise.  The portfolio's other meshes are
+    left out (BOTH_BELOW 0): a centroid mesh fits this count too."""
     from bubblemesh.studies import quality as Q
 
+    monkeypatch.setattr(pipeline, "BOTH_BELOW", 0)
     domain = _plate_with_fine_holes()
     predicted = Q.predicted_count(domain, SizeField.from_domain(domain, size=0.06)).count
     aim = pipeline.COUNT_AIM
@@ -637,6 +639,40 @@ def test_slender_teeth_filled_two_rows_deep_keep_the_fields_count(teeth, depth, 
     areas = [0.5 * math.fsum([a[0] * b[1], -a[1] * b[0]])
              for a, b in zip(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])]
     assert max(areas) <= max_area
+    _valid_and_conforming(m, domain)
+    gmsh_points, gmsh_triangles = Q.run_gmsh(m, field, len(m.triangles))[:2]
+    assert abs(len(gmsh_triangles) / len(m.triangles) - 1) <= 0.03
+    ours = O.radius_ratio_reference(np.asarray(m.points), np.asarray(m.triangles)).mean()
+    assert ours >= O.radius_ratio_reference(gmsh_points, gmsh_triangles).mean()
+
+
+@pytest.mark.heavy
+def test_a_small_frontal_mesh_is_matched_against_centroid_meshes(monkeypatch):
+    """The shapes study's thin ring (radii 1 and 0.9, 128 nodes a loop) at
+    area / 1000 takes frontal insertion (a cap and 1,000 elements of it) and
+    has fewer than BOTH_BELOW elements, so bm.mesh makes two centroid meshes
+    too (with and without the frontal seeds) and returns the best.  The front
+    lays three rows where the field asks for 3.25 (0.92 of its count); a
+    centroid mesh fits it.  The count must be within 5% of the field's (the
+    quality study's adaptive integral), and the mean radius ratio at least
+    Gmsh Frontal-Delaunay's on the same boundary nodes at the same count."""
+    from bubblemesh.studies import quality as Q
+    from bubblemesh.studies.shapes import shapes
+
+    pytest.importorskip("gmsh")
+    made, real = [], pipeline._mesh_with
+
+    def spy(domain, fine, field, frontal, seeded, *args, **kwargs):
+        made.append((frontal, seeded))
+        return real(domain, fine, field, frontal, seeded, *args, **kwargs)
+
+    monkeypatch.setattr(pipeline, "_mesh_with", spy)
+    domain = bm.Domain.from_loops(dict(shapes())["thin ring"])
+    max_area = domain.area / 1000
+    m = bm.mesh(domain, max_area=max_area)
+    assert made[0] == (True, True) and {(False, True), (False, False)} <= set(made[1:])
+    field = pipeline.size_field(domain, max_area=max_area)
+    assert abs(len(m.triangles) / Q.predicted_count(domain, field).count - 1) <= 0.05
     _valid_and_conforming(m, domain)
     gmsh_points, gmsh_triangles = Q.run_gmsh(m, field, len(m.triangles))[:2]
     assert abs(len(gmsh_triangles) / len(m.triangles) - 1) <= 0.03
