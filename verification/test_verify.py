@@ -377,3 +377,16 @@ def test_centroid_location_in_small_batches_equals_exact(monkeypatch):
     exact = conform.locate_centroids(E, tri, B, exact=True)
     assert np.array_equal(fast, exact)
     assert set(fast.tolist()) == {1, -1}  # the hole's triangles are outside
+
+
+def test_loops_touching_at_a_node_are_refused_by_name():
+    """Two unit squares sharing the corner (1, 1), each split in two: the
+    checker takes only loops that share no node, so it refuses the input with
+    a GeometryError that names the shared node and says why."""
+    from bubblemesh.errors import GeometryError
+
+    P = np.array([(0, 0), (1, 0), (1, 1), (0, 1), (2, 1), (2, 2), (1, 2)], float)
+    T = np.array([(0, 1, 2), (0, 2, 3), (2, 4, 5), (2, 5, 6)])
+    S = np.array([(0, 1), (1, 2), (2, 3), (3, 0), (2, 4), (4, 5), (5, 6), (6, 2)])
+    with pytest.raises(GeometryError, match=r"node 2 is on 4 segments.*touch at a node"):
+        verify.check(P, T, S, P)

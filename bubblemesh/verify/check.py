@@ -106,7 +106,7 @@ def _conformity(E, H, tri, report, segments, bpts, holes, oriented, split_tol, a
             domain, seg_mesh = Boundary(E, seg, holes, oriented), seg
             source = f"{len(seg)} input segments over the mesh nodes"
         else:
-            domain = Boundary(E, seg + n, holes, oriented)
+            domain = Boundary(E, seg + n, holes, oriented, first=n)
             seg_mesh = map_boundary_nodes(E.points[:n], bpts, report)[seg]
             source = f"{len(seg)} input segments over {len(bpts)} boundary nodes"
     sub, owner = segment_chains(E, H, seg_mesh, report, split_tol, allow_splits)

@@ -5,7 +5,8 @@ The domain is the set of points enclosed by an odd number of boundary loops
 depth hole boundaries.  This is Triangle's domain when every hole has a hole
 point.  Internal constraint segments (triangles on both sides) are not
 supported: the boundary must be closed loops, each node on exactly two
-segments.
+segments, so loops that touch at a node (two squares sharing a corner) are
+refused too.
 """
 
 from __future__ import annotations
@@ -22,12 +23,13 @@ _EPS = np.finfo(np.float64).eps
 _MAX_PAIRS = 4_000_000  # (query, segment) pairs evaluated per numpy batch
 
 
-def chain_loops(segments: np.ndarray, oriented: bool) -> list[list[int]]:
+def chain_loops(segments: np.ndarray, oriented: bool, first: int = 0) -> list[list[int]]:
     """Closed loops of node ids from segments (K, 2).
 
     ``oriented``: each segment runs a -> b and every node starts one segment
     and ends one; otherwise every node is on exactly two segments.  Raises
-    GeometryError naming the node where the segments do not close.
+    GeometryError naming the node where the segments do not close (its id
+    less ``first``: the caller's numbering).
     """
     seg = np.asarray(segments, dtype=np.int64).reshape(-1, 2).tolist()
     nbr: dict[int, list[int]] = {}
@@ -40,10 +42,13 @@ def chain_loops(segments: np.ndarray, oriented: bool) -> list[list[int]]:
     for node, out in nbr.items():
         if len(out) != (1 if oriented else 2):
             raise GeometryError(
-                f"segments do not form closed loops: node {node} starts {len(out)} segments"
+                f"segments do not form closed loops: node {node - first} starts {len(out)} "
+                "segments"
                 if oriented
-                else f"segments do not form closed loops: node {node} is on {len(out)} segments"
-                " (internal constraints and open chains are not supported)"
+                else f"segments do not form closed loops: node {node - first} is on {len(out)} "
+                "segments"
+                " (interior constraints, open chains and loops that touch at a node are not"
+                " supported)"
             )
     loops, seen = [], set()
     for a, _ in seg:
@@ -56,7 +61,7 @@ def chain_loops(segments: np.ndarray, oriented: bool) -> list[list[int]]:
             if nxt == a:
                 break
             if nxt in seen:
-                raise GeometryError(f"segments do not form simple loops (node {nxt})")
+                raise GeometryError(f"segments do not form simple loops (node {nxt - first})")
             prev, x = x, nxt
             seen.add(x)
             loop.append(x)
@@ -134,15 +139,18 @@ class Boundary:
 
     ``segments`` (K, 2) index ``E``'s points.  ``holes`` (optional hole
     points, as in a .poly file) are checked against the even-odd rule.
+    Errors name nodes less ``first`` (the caller's numbering of ``E``'s
+    points from there on).
     """
 
-    def __init__(self, E: ExactPoints, segments, holes=None, oriented=False):
+    def __init__(self, E: ExactPoints, segments, holes=None, oriented=False, first=0):
         self.E = E
+        self.first = int(first)
         self.segments = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
         self.oriented = oriented
         if len(self.segments) < 3:
             raise GeometryError(f"a boundary needs at least 3 segments, got {len(self.segments)}")
-        self.loops = chain_loops(self.segments, oriented)
+        self.loops = chain_loops(self.segments, oriented, self.first)
         self.depth = self._depths()
         self._check_holes(holes)
 
@@ -191,8 +199,8 @@ class Boundary:
                     continue
                 w = point_in_polygon(P[lp[0]], poly)
                 if w == 0:
-                    raise GeometryError(f"boundary loops touch: node {lp[0]} of loop {i} "
-                                        f"lies on loop {j}")
+                    raise GeometryError(f"boundary loops touch: node {lp[0] - self.first} of "
+                                        f"loop {i} lies on loop {j}")
                 d += w > 0
             depth.append(d)
         return depth
@@ -214,8 +222,9 @@ class Boundary:
         for i, d in enumerate(self.depth):
             if d % 2 == 1 and not any(where[i] > 0 for where in inside):
                 raise GeometryError(
-                    f"loop {i} (node {self.loops[i][0]}) bounds a hole by the even-odd rule but "
-                    "contains no hole point: meshed-on-both-sides loops are not supported"
+                    f"loop {i} (node {self.loops[i][0] - self.first}) bounds a hole by the "
+                    "even-odd rule but contains no hole point: meshed-on-both-sides loops are "
+                    "not supported"
                 )
 
     # -- global facts ---------------------------------------------------
