@@ -31,8 +31,7 @@ below 0.7 is this population defect.  So, worst triangle first:
 Rounds stop when the worst triangle is at least ``below``, when no variant
 of any triangle below it pays (FAILED triangles tried in vain at most: one
 at a sharp corner cannot be mended, and must not hide the rest), or after
-``rounds``.  Every round is
-deterministic (ties broken by index).
+``rounds``.  Every round is deterministic (ties broken by index).
 
 :func:`balance_count` uses the same re-triangulation and relaxation to bring
 the element count into a window: a node removed where the mesh is most
@@ -109,9 +108,9 @@ def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings
     smallest ratio) kept, or without ``by_mean`` of the CANDIDATES / 4
     sparsest the other way round.  Either only if that ratio is not below
     the mesh's minimum (or ``floor``, where that is lower: removals may then
-    lower the minimum down to it), nor below ``least`` where the mesh's
-    minimum is (a sharp corner's triangle sets no bar for the rest of the
-    mesh), and the area bounds hold.  ``size`` maps
+    lower the minimum down to it), nor below ``least`` (a sharp corner's
+    triangle can hold the minimum far lower, which then bars nothing), and
+    the area bounds hold.  ``size`` maps
     (k, 2) points to (k,) sizes; the rest and the result as
     :func:`repair_worst`."""
     count = MEAN_CANDIDATES if by_mean else CANDIDATES
