@@ -541,21 +541,44 @@ def test_poor_elements_are_excused_only_at_corners_too_sharp_for_0_7():
 def test_the_target_verdicts_of_a_table():
     """Hand-made rows: case a meets the mean, misses the min; case b meets
     only the min (a poor element off the sharp corners, 6% over the count);
-    case c's Gmsh count is 4% off bm's, so its quality is not compared."""
+    case c's Gmsh count is 4% off bm's, so its quality is not compared; on
+    cases d and e Gmsh's count jumped across bm's (94 and 106): d beats both
+    meshes, e only the nearer one's mean and the farther one's min."""
     pd = pytest.importorskip("pandas")
     from bubblemesh.studies.quality import target_summary, target_verdicts
 
     rows = [("a", "bm", 100, 0.97, 0.80, 0, 1.02), ("a", "gmsh", 102, 0.96, 0.85, 0, 1.0),
             ("b", "bm", 100, 0.95, 0.90, 1, 1.06), ("b", "gmsh", 98, 0.96, 0.80, 3, 1.0),
-            ("c", "bm", 100, 0.90, 0.70, 0, 1.0), ("c", "gmsh", 104, 0.96, 0.80, 0, 1.0)]
+            ("c", "bm", 100, 0.90, 0.70, 0, 1.0), ("c", "gmsh", 104, 0.96, 0.80, 0, 1.0),
+            ("d", "bm", 100, 0.97, 0.80, 0, 1.0), ("d", "gmsh", 94, 0.96, 0.70, 0, 1.0),
+            ("d", "gmsh_beyond", 106, 0.965, 0.75, 0, 1.0),
+            ("e", "bm", 100, 0.97, 0.80, 0, 1.0), ("e", "gmsh", 94, 0.96, 0.85, 0, 1.0),
+            ("e", "gmsh_beyond", 106, 0.98, 0.75, 0, 1.0)]
     table = pd.DataFrame(rows, columns=["case", "mesher", "N", "mean", "min",
                                         "below_0.7_off_sharp", "N/predicted"])
     verdicts = list(target_verdicts(table).values())
-    assert verdicts == [(["a"], ["b"]), (["b"], ["a"]), (["a", "c"], ["b"]),
-                        (["a", "c"], ["b"])]
+    assert verdicts == [(["a", "d"], ["b", "e"]), (["b", "d"], ["a", "e"]),
+                        (["a", "c", "d", "e"], ["b"]), (["a", "c", "d", "e"], ["b"])]
     summary = target_summary(table)
-    assert "mean >= Gmsh's on 1 of 2 (not b)" in summary
-    assert summary.endswith("missed bm's by over 3%: c")
+    assert "mean >= Gmsh's on 2 of 4 (not b, e)" in summary
+    assert summary.endswith("missed bm's by over 3%: c; against Gmsh's meshes on both sides "
+                            "of bm's count, where its count jumped across it: d, e")
+
+
+def test_the_gmsh_run_on_the_other_side_of_a_count_it_jumped_across():
+    """_other_side: none when the closest run is within MATCHED, else the run
+    nearest the count among those on the closest's other side, none when no
+    run is there."""
+    from bubblemesh.studies.quality import _other_side
+
+    def runs(*counts):
+        return [(None, np.zeros((n, 3)), 0.0) for n in counts]
+
+    assert _other_side(runs(90, 102, 120), 102, 100) is None
+    got = _other_side(runs(80, 94, 112, 107, 130), 94, 100)
+    assert got is not None and len(got[1]) == 107
+    assert len(_other_side(runs(93, 108, 89), 108, 100)[1]) == 93
+    assert _other_side(runs(80, 94, 90), 94, 100) is None
 
 
 def test_gmsh_with_a_uniform_size_and_triangle_at_tiny_areas_match_the_count():
@@ -757,3 +780,24 @@ def test_the_studys_field_is_the_meshers_with_its_regional_areas():
     floor = 32 / (FILL * 0.02) + 32 / (FILL * 0.5)
     assert rows["bm"]["predicted"] >= floor
     assert abs(rows["bm"]["ratio"] - 1) <= 0.05
+
+
+def test_the_report_names_the_counts_gmsh_jumped_across(tmp_path):
+    """The report's Gmsh section says, for a case whose Gmsh count jumped
+    across bm's, both of Gmsh's counts and bm's, and judges bm against the
+    better mesh; a case missed on one side only is named as not compared."""
+    pd = pytest.importorskip("pandas")
+    from bubblemesh.studies.report import _quality_vs_gmsh
+
+    rows = [("d", "bm", 100, 0.97, 0.80), ("d", "gmsh", 94, 0.96, 0.70),
+            ("d", "gmsh_beyond", 106, 0.98, 0.75), ("c", "bm", 100, 0.90, 0.70),
+            ("c", "gmsh", 104, 0.96, 0.80)]
+    table = pd.DataFrame([dict(case=c, mesher=m, N=n, predicted=100.0, **{"N/predicted": 1.0},
+                               min=lo, mean=mean, **{"below_0.7": 0, "below_0.7_off_sharp": 0},
+                               valid=True, wins_mean="", wins_min="", **{"wins_below_0.7": ""})
+                          for c, m, n, mean, lo in rows])
+    table.to_csv(tmp_path / "quality_vs_gmsh.csv", index=False)
+    text = _quality_vs_gmsh(tmp_path)[1][1]
+    assert "mean >= Gmsh's on 0 of 1 (not d)" in text and "min >= Gmsh's on 1 of 1" in text
+    assert "jumped across bm's as its size scale changed on d (from 94 to 106, bm 100)" in text
+    assert "within 3% of bm's on c (104 against 100)" in text

@@ -349,17 +349,26 @@ def _quality_vs_gmsh(out: Path):
 
 
 def _unmatched(q):
-    """A sentence giving the counts where Gmsh's missed bm's by more than
+    """Sentences giving the counts where Gmsh's missed bm's by more than
     MATCHED (no scale of its size reached it), '' when none."""
-    from .quality import MATCHED, unmatched_cases
+    from .quality import MATCHED, bracketed_cases, unmatched_cases
 
     n = q.set_index(["case", "mesher"])["N"]
+    text = ""
     off = unmatched_cases(q)
-    if not off:
-        return ""
-    return (f" Gmsh's count could not be brought within {MATCHED:.0%} of bm's on " + ", ".join(
-        f"{c} ({n[c, 'gmsh']} against {n[c, 'bm']})" for c in off) + ": its count jumps "
-        "past that range as its size scale changes.")
+    if off:
+        text += (f" Gmsh's count could not be brought within {MATCHED:.0%} of bm's on " +
+                 ", ".join(f"{c} ({n[c, 'gmsh']} against {n[c, 'bm']})" for c in off) +
+                 ": its count jumps past that range as its size scale changes.")
+    jumped = bracketed_cases(q)
+    if jumped:
+        text += (" Gmsh's count jumped across bm's as its size scale changed on " +
+                 ", ".join(f"{c} (from {min(n[c, 'gmsh'], n[c, 'gmsh_beyond'])} to "
+                           f"{max(n[c, 'gmsh'], n[c, 'gmsh_beyond'])}, bm {n[c, 'bm']})"
+                           for c in jumped) +
+                 ": there both of its meshes are rows (gmsh_beyond the farther), and bm is "
+                 "judged against the better of them.")
+    return text
 
 
 def _benchmark(out: Path):
