@@ -379,14 +379,142 @@ def test_centroid_location_in_small_batches_equals_exact(monkeypatch):
     assert set(fast.tolist()) == {1, -1}  # the hole's triangles are outside
 
 
-def test_loops_touching_at_a_node_are_refused_by_name():
-    """Two unit squares sharing the corner (1, 1), each split in two: the
-    checker takes only loops that share no node, so it refuses the input with
-    a GeometryError that names the shared node and says why."""
+# Loops that touch at nodes, with the Euler number of the region by Alexander
+# duality (components less bounded components of the complement): two squares
+# sharing the corner (1, 1) (1 - 0); a triangular hole whose corner is the
+# outer boundary's node (1.5, 0) (1 - 1); two square holes touching at (2, 2)
+# inside a 4 x 4 square (1 - 2).
+TOUCHING = {
+    "corner": ([(0, 0), (1, 0), (1, 1), (0, 1), (2, 1), (2, 2), (1, 2)],
+               [(0, 1), (1, 2), (2, 3), (3, 0), (2, 4), (4, 5), (5, 6), (6, 2)], [], 1),
+    "hole on the wall": ([(0, 0), (1.5, 0), (3, 0), (3, 3), (0, 3), (2, 1), (1, 1)],
+                         [(0, 1), (1, 2), (2, 3), (3, 4), (4, 0), (1, 5), (5, 6), (6, 1)],
+                         [(1.5, 0.6)], 0),
+    "holes touching": ([(0, 0), (4, 0), (4, 4), (0, 4), (1, 1), (2, 1), (2, 2), (1, 2),
+                        (3, 2), (3, 3), (2, 3)],
+                       [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4),
+                        (6, 8), (8, 9), (9, 10), (10, 6)], [(1.5, 1.5), (2.5, 2.5)], -1),
+}
+
+
+def _touching_case(name):
+    points, segments, holes, euler = TOUCHING[name]
+    return (np.array(points, float), np.array(segments), np.array(holes, float).reshape(-1, 2),
+            euler)
+
+
+def _shapely_region(points, segments):
+    """The even-odd region of the segments by GEOS: the union of the faces of
+    their arrangement that a brute-force ray test puts inside."""
+    shapely = pytest.importorskip("shapely")
+
+    lines = [shapely.LineString(points[list(s)]) for s in segments.tolist()]
+    faces = shapely.polygonize(lines).geoms  # the arrangement's bounded faces
+    return shapely.union_all([f for f in faces
+                              if _even_odd(points, segments, f.representative_point())])
+
+
+def _even_odd(points, segments, q):
+    """Brute-force even-odd rule: does a rightward ray from q cross an odd
+    number of segments (half-open in y)?"""
+    x, y, crossings = q.x, q.y, 0
+    for a, b in segments.tolist():
+        (x1, y1), (x2, y2) = points[a], points[b]
+        if (y1 > y) != (y2 > y) and x < x1 + (y - y1) * (x2 - x1) / (y2 - y1):
+            crossings += 1
+    return crossings % 2 == 1
+
+
+@pytest.mark.parametrize("name", sorted(TOUCHING))
+def test_loops_touching_at_a_node_check_against_triangle_and_geos(name):
+    """Triangle's quality mesh of each touching case passes the check,
+    whose domain area is GEOS's area of the even-odd region and whose Euler
+    number is the region's by topology (pinching two boundaries together at
+    a point lowers it by one); given only the mesh, its own boundary edges
+    pass too.  Filling a hole, or dropping the triangles on one side of the
+    touching node, fails the area and the Euler count."""
+    triangle = pytest.importorskip("triangle")
+    points, segments, holes, euler = _touching_case(name)
+    data = dict(vertices=points, segments=segments)
+    if len(holes):
+        data["holes"] = holes
+    out = triangle.triangulate(data, "pq30a0.05")
+    pts, tri = out["vertices"], out["triangles"].astype(np.int64)
+    report = verify.check(pts, tri, segments, points, holes=holes if len(holes) else None)
+    assert report.ok, report.summary()
+    assert report.facts["domain_area"] == pytest.approx(_shapely_region(points, segments).area,
+                                                        rel=1e-12)
+    assert report.facts["euler"] == euler
+    assert verify.check(pts, tri).ok
+
+    filled = triangle.triangulate(dict(vertices=points, segments=segments), "pq30a0.05")
+    if len(holes):
+        bad = verify.check(filled["vertices"], filled["triangles"].astype(np.int64), segments,
+                           points, holes=holes)
+        assert bad.count("outside_domain") and bad.count("area")
+    pinch = points[np.bincount(segments.ravel()).argmax()]  # the node loops share
+    left = pts[tri].mean(axis=1)[:, 0] < pinch[0]
+    bad = verify.check(pts, tri[left], segments, points, holes=holes if len(holes) else None)
+    assert bad.count("area") and bad.count("euler") == (name != "corner")
+
+
+def test_touching_loops_are_traced_without_crossing():
+    """chain_loops on the touching cases: simple loops (no node twice), every
+    segment once, as many loops as GEOS finds rings in the region's boundary
+    pieces; segments given in any order and direction give the same loops."""
+    from bubblemesh.verify.domain import chain_loops
+
+    for name in TOUCHING:
+        points, segments, _, _ = _touching_case(name)
+        P = ExactPoints(points).P
+        want = {frozenset(map(frozenset, zip(lp, lp[1:] + lp[:1])))
+                for lp in chain_loops(segments, False, points=P)}
+        rng = np.random.default_rng(3)
+        for _ in range(5):
+            shuffled = segments[rng.permutation(len(segments))]
+            flip = rng.random(len(shuffled)) < 0.5
+            shuffled[flip] = shuffled[flip, ::-1]
+            loops = chain_loops(shuffled, False, points=P)
+            assert all(len(set(lp)) == len(lp) for lp in loops)
+            assert sum(map(len, loops)) == len(segments)
+            assert {frozenset(map(frozenset, zip(lp, lp[1:] + lp[:1]))) for lp in loops} == want
+        assert len(want) == 3 if name == "holes touching" else len(want) == 2
+
+
+def test_nodes_on_an_odd_number_of_segments_are_refused_by_name():
+    """A dangling segment from a square's corner (node 2 on 3 segments) and an
+    oriented loop pair whose node starts two segments and ends none: each is a
+    GeometryError naming the node."""
     from bubblemesh.errors import GeometryError
 
-    P = np.array([(0, 0), (1, 0), (1, 1), (0, 1), (2, 1), (2, 2), (1, 2)], float)
-    T = np.array([(0, 1, 2), (0, 2, 3), (2, 4, 5), (2, 5, 6)])
-    S = np.array([(0, 1), (1, 2), (2, 3), (3, 0), (2, 4), (4, 5), (5, 6), (6, 2)])
-    with pytest.raises(GeometryError, match=r"node 2 is on 4 segments.*touch at a node"):
-        verify.check(P, T, S, P)
+    P = np.array([(0, 0), (1, 0), (1, 1), (0, 1), (2, 2)], float)
+    T = np.array([(0, 1, 2), (0, 2, 3)])
+    S = np.array([(0, 1), (1, 2), (2, 3), (3, 0), (2, 4)])
+    with pytest.raises(GeometryError, match=r"node 2 is on 3 segments.*open chains"):
+        verify.check(P[:4], T, S, P)
+    S = np.array([(0, 1), (1, 2), (2, 3), (0, 3)])
+    with pytest.raises(GeometryError, match=r"node 0 starts 2 segments and ends 0"):
+        verify.check(P[:4], T, S, P[:4], oriented=True)
+
+
+@pytest.mark.parametrize("name", sorted(TOUCHING))
+def test_bm_meshes_of_touching_loops_pass_the_check(name):
+    """bm.mesh of each touching case (its loops given to Domain.from_pslg in
+    the order and direction GEOS's rings of the region's boundary have, not
+    the checker's) passes the exact check with the case's Euler number."""
+    import warnings
+
+    import bubblemesh as bm
+
+    points, segments, holes, euler = _touching_case(name)
+    region = _shapely_region(points, segments)
+    polygons = getattr(region, "geoms", [region])
+    rings = [np.asarray(r.coords)[:-1] for p in polygons for r in [p.exterior, *p.interiors]]
+    domain = bm.Domain.from_pslg(rings, holes=holes)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", bm.QualityWarning)
+        m = bm.mesh(domain, max_area=domain.area / 200)
+    report = verify.check(m.points, m.triangles, segments, points,
+                          holes=holes if len(holes) else None)
+    assert report.ok, report.summary()
+    assert report.facts["euler"] == euler

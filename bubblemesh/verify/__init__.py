@@ -16,7 +16,8 @@ What is checked (each failure a :class:`Violation` with its kind and location):
   ``report.splits``); the mesh boundary edges are exactly those pieces; no
   triangle centroid outside the domain, in a hole or on a loop (exact
   even-odd rule); the areas sum to the exact domain area; V - E + F equals
-  the domain's components minus holes;
+  the domain's Euler number (components minus holes with the nodes where
+  loops touch pulled apart, less one per extra pass through such a node);
 - constrained Delaunay emptiness by definition: no node strictly inside a
   triangle's circumcircle and visible from it across the segments (exact);
 - quality: radius ratio 2r/R, angles, counts below 0.5 and 0.7;

@@ -34,7 +34,8 @@ def check(points, triangles, segments=None, boundary_points=None, radii=None, *,
 
     points (N, 2), or (N, 3) with z = 0; triangles (M, 3) node ids.
     segments (K, 2): the input boundary, as closed loops of node pairs into
-    ``boundary_points`` (B, 2) if given, else into ``points``.  Without
+    ``boundary_points`` (B, 2) if given, else into ``points``; loops may
+    touch at nodes, not cross.  Without
     segments the mesh's own boundary edges are the boundary (then
     conformity only checks that they form loops and the Euler count).
     radii (N,): node bubble radii; adds the population criterion (eq. 6).

@@ -3,14 +3,18 @@
 The domain is the set of points enclosed by an odd number of boundary loops
 (the even-odd rule): loops at even nesting depth are outer boundaries, at odd
 depth hole boundaries.  This is Triangle's domain when every hole has a hole
-point.  Internal constraint segments (triangles on both sides) are not
-supported: the boundary must be closed loops, each node on exactly two
-segments, so loops that touch at a node (two squares sharing a corner) are
-refused too.
+point.  Loops may touch at nodes (two squares sharing a corner, a hole whose
+corner is on the outer boundary): where more than two segments meet, the
+loops are traced as the faces' boundaries, each leaving a node by the first
+segment clockwise from the one it came in on (exact angles), and cut into
+simple loops wherever a walk meets its own node.  Internal constraint
+segments (triangles on both sides) and open chains are not supported: every
+node is on an even number of segments.
 """
 
 from __future__ import annotations
 
+import functools
 from fractions import Fraction
 
 import numpy as np
@@ -23,50 +27,146 @@ _EPS = np.finfo(np.float64).eps
 _MAX_PAIRS = 4_000_000  # (query, segment) pairs evaluated per numpy batch
 
 
-def chain_loops(segments: np.ndarray, oriented: bool, first: int = 0) -> list[list[int]]:
-    """Closed loops of node ids from segments (K, 2).
+def chain_loops(segments: np.ndarray, oriented: bool, first: int = 0,
+                points=None) -> list[list[int]]:
+    """Closed simple loops of node ids from segments (K, 2).
 
-    ``oriented``: each segment runs a -> b and every node starts one segment
-    and ends one; otherwise every node is on exactly two segments.  Raises
+    ``oriented``: each segment runs a -> b and every node starts as many
+    segments as it ends; otherwise every node is on an even number of
+    segments.  Where a node is on more than two, ``points`` (exact integer
+    points, indexed by node id) order its segments by angle: a walk arriving
+    at a node leaves by the first unused segment clockwise from the one it
+    came in on, and a walk that meets a node already on it closes a loop
+    there, so loops touch at such nodes but do not cross.  Raises
     GeometryError naming the node where the segments do not close (its id
     less ``first``: the caller's numbering).
     """
     seg = np.asarray(segments, dtype=np.int64).reshape(-1, 2).tolist()
-    nbr: dict[int, list[int]] = {}
     for a, b in seg:
         if a == b:
             raise GeometryError(f"segment ({a}, {b}) has zero length")
-        nbr.setdefault(a, []).append(b)
-        if not oriented:
-            nbr.setdefault(b, []).append(a)
-    for node, out in nbr.items():
-        if len(out) != (1 if oriented else 2):
+    ends = _ends(seg)  # node -> ids of the segments at it
+    for node, at in ends.items():
+        starts = sum(seg[k][0] == node for k in at)
+        if oriented and 2 * starts != len(at):
+            raise GeometryError(f"segments do not form closed loops: node {node - first} "
+                                f"starts {starts} segments and ends {len(at) - starts}")
+        if len(at) % 2 or (len(at) > 2 and points is None):
             raise GeometryError(
-                f"segments do not form closed loops: node {node - first} starts {len(out)} "
-                "segments"
-                if oriented
-                else f"segments do not form closed loops: node {node - first} is on {len(out)} "
-                "segments"
-                " (interior constraints, open chains and loops that touch at a node are not"
-                " supported)"
-            )
-    loops, seen = [], set()
-    for a, _ in seg:
-        if a in seen:
-            continue
-        loop, prev, x = [a], -1, a
-        seen.add(a)
-        for _ in range(len(seg)):  # bounded: a loop has at most K nodes
-            nxt = nbr[x][0] if oriented or nbr[x][0] != prev else nbr[x][1]
-            if nxt == a:
-                break
-            if nxt in seen:
-                raise GeometryError(f"segments do not form simple loops (node {nxt - first})")
-            prev, x = x, nxt
-            seen.add(x)
-            loop.append(x)
-        loops.append(loop)
+                f"segments do not form closed loops: node {node - first} is on {len(at)} "
+                "segments (interior constraints and open chains are not supported)")
+    turn = _turns(seg, ends, points)
+    used = [False] * len(seg)
+    loops: list[list[int]] = []
+    for k in range(len(seg)):
+        if not used[k]:
+            loops += _walk_loops(k, seg, ends, turn, used, oriented, first)
     return loops
+
+
+def _turns(seg, ends, points):
+    """{node: its segment ids counter-clockwise} where more than two meet."""
+    return {node: _by_angle(node, at, seg, points) for node, at in ends.items() if len(at) > 2}
+
+
+def _ends(seg):
+    ends: dict[int, list[int]] = {}
+    for k, (a, b) in enumerate(seg):
+        ends.setdefault(a, []).append(k)
+        ends.setdefault(b, []).append(k)
+    return ends
+
+
+def face_walks(seg, points) -> list[list[int]]:
+    """The closed walks around the faces left of directed segments ``seg``
+    (a list of [a, b]; every node starts as many as it ends): from each
+    segment the next is the first one leaving its end clockwise from it, so a
+    walk passes through a node where faces touch as often as it borders them."""
+    ends = _ends(seg)
+    turn = _turns(seg, ends, points)
+    used = [False] * len(seg)
+    walks = []
+    for k in range(len(seg)):
+        e, walk = k, []
+        while not used[e]:  # bounded: every step marks one segment
+            used[e] = True
+            walk.append(seg[e][0])
+            node = seg[e][1]
+            order = turn.get(node, ends[node])
+            i = order.index(e)
+            e = next(order[(i - step) % len(order)] for step in range(1, len(order) + 1)
+                     if seg[order[(i - step) % len(order)]][0] == node)
+        if walk:
+            walks.append(walk)
+    return walks
+
+
+def _other(seg, k, node):
+    a, b = seg[k]
+    return b if a == node else a
+
+
+def _by_angle(node, at, seg, points):
+    """The segment ids at ``node`` in counter-clockwise order of direction (exact)."""
+    x0, y0 = points[node]
+
+    def direction(k):
+        x, y = points[_other(seg, k, node)]
+        return x - x0, y - y0
+
+    def before(j, k):
+        (ax, ay), (bx, by) = direction(j), direction(k)
+        ha, hb = (ay < 0 or (ay == 0 and ax < 0)), (by < 0 or (by == 0 and bx < 0))
+        if ha != hb:
+            return -1 if hb else 1
+        cross = ax * by - ay * bx
+        return -1 if cross > 0 else (1 if cross < 0 else 0)
+
+    order = sorted(at, key=functools.cmp_to_key(before))
+    for j, k in zip(order, order[1:] + order[:1]):
+        if before(j, k) == 0 and j != k:
+            raise GeometryError(f"segments {j} and {k} leave node {node} in the same "
+                                "direction: they overlap")
+    return order
+
+
+def _walk_loops(k, seg, ends, turn, used, oriented, first):
+    """The simple loops of the closed walk that starts with segment k."""
+    start = seg[k][0]
+    path, on_path, loops = [start], {start: 0}, []
+    node, came = start, -1
+    for _ in range(len(seg)):  # bounded: each step uses one segment
+        nxt = k if came < 0 else _leave(node, came, seg, ends, turn, used, oriented)
+        if nxt < 0:
+            raise GeometryError(f"segments do not form closed loops at node {node - first}")
+        used[nxt] = True
+        node, came = _other(seg, nxt, node), nxt
+        if node in on_path:  # a loop closes: cut it off the walk
+            cut = on_path[node]
+            loops.append(path[cut:])
+            for x in path[cut + 1:]:
+                del on_path[x]
+            del path[cut + 1:]
+            if node == start and len(path) == 1 and not any(
+                    not used[j] for j in ends[start]):
+                return loops
+        else:
+            on_path[node] = len(path)
+            path.append(node)
+    raise GeometryError(f"segments do not form closed loops at node {start - first}")
+
+
+def _leave(node, came, seg, ends, turn, used, oriented):
+    """The segment a walk that reached ``node`` by segment ``came`` leaves by:
+    the first unused one clockwise from ``came`` (the only other one where
+    ``node`` is on two); -1 if none."""
+    order = turn.get(node, ends[node])
+    i = order.index(came)
+    for step in range(1, len(order)):
+        j = order[(i - step) % len(order)]
+        if not used[j] and (not oriented or seg[j][0] == node):
+            return j
+    return -1
 
 
 def _band_pairs(qy_sorted, lo_y, hi_y):
@@ -150,7 +250,7 @@ class Boundary:
         self.oriented = oriented
         if len(self.segments) < 3:
             raise GeometryError(f"a boundary needs at least 3 segments, got {len(self.segments)}")
-        self.loops = chain_loops(self.segments, oriented, self.first)
+        self.loops = chain_loops(self.segments, oriented, self.first, E.P)
         self.depth = self._depths()
         self._check_holes(holes)
 
@@ -188,19 +288,23 @@ class Boundary:
         return np.nonzero((lo <= y) & (y <= hi))[0].tolist()
 
     def _depths(self) -> list[int]:
-        """Nesting depth of each loop: how many other loops enclose it (exact)."""
+        """Nesting depth of each loop: how many other loops enclose it (exact),
+        judged at the middle of its first segment (loops may share nodes, not
+        segments)."""
         P = self.E.P
-        polys = [[P[i] for i in lp] for lp in self.loops]
+        polys = [[(2 * P[i][0], 2 * P[i][1]) for i in lp] for lp in self.loops]
         depth = []
         for i, lp in enumerate(self.loops):
+            a, b = P[lp[0]], P[lp[1]]
+            middle = (a[0] + b[0], a[1] + b[1])  # in the doubled scale of polys
             d = 0
             for j, poly in enumerate(polys):
                 if i == j:
                     continue
-                w = point_in_polygon(P[lp[0]], poly)
+                w = point_in_polygon(middle, poly)
                 if w == 0:
-                    raise GeometryError(f"boundary loops touch: node {lp[0] - self.first} of "
-                                        f"loop {i} lies on loop {j}")
+                    raise GeometryError(f"boundary loops overlap: segment ({lp[0] - self.first}, "
+                                        f"{lp[1] - self.first}) of loop {i} lies on loop {j}")
                 d += w > 0
             depth.append(d)
         return depth
@@ -240,5 +344,20 @@ class Boundary:
         return float(self.area_exact() / (1 << (2 * self.E.shift)))
 
     def euler(self) -> int:
-        """Euler characteristic of the domain: components minus holes."""
-        return sum(1 if d % 2 == 0 else -1 for d in self.depth)
+        """Euler characteristic of the closed domain (V - E + F of any mesh of
+        it).  With the segments turned so that the domain is on their left,
+        the walks around its faces are each one boundary of a face that has
+        its touching nodes pulled apart: +1 for an outer one (counter-
+        clockwise), -1 for a hole's.  Joining the copies of a node again
+        takes one vertex per extra copy: K segments over V nodes, K - V in
+        all."""
+        P = self.E.P
+        directed = []
+        for lp, d in zip(self.loops, self.depth):
+            ring = list(zip(lp, lp[1:] + lp[:1]))
+            if (signed_area_exact(P, lp) > 0) != (d % 2 == 0):
+                ring = [(b, a) for a, b in reversed(ring)]
+            directed += [list(e) for e in ring]
+        nodes = len(set(np.asarray(self.segments).ravel().tolist()))
+        sides = sum(1 if signed_area_exact(P, w) > 0 else -1 for w in face_walks(directed, P))
+        return sides - (len(directed) - nodes)
