@@ -538,6 +538,21 @@ def test_poor_elements_are_excused_only_at_corners_too_sharp_for_0_7():
     assert not measure(square, points, [[0, 1, 4], [1, 2, 4], [2, 3, 4]])["valid"]
 
 
+def test_a_mesh_across_an_interior_constraint_is_not_valid():
+    """A square with the constraint (0, 0)-(1, 1): its two triangles split
+    along the diagonal are valid, the two split along the other diagonal
+    (crossing the constraint) are not, nor are the two triangles of the half
+    below it alone (the constraint would bound the mesh)."""
+    from bubblemesh.studies.quality import measure
+
+    square = bm.Domain.from_pslg([[(0, 0), (1, 0), (1, 1), (0, 1)]],
+                                 constraints=[[(0, 0), (1, 1)]])
+    points = np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float)
+    assert measure(square, points, [[0, 1, 2], [0, 2, 3]])["valid"]
+    assert not measure(square, points, [[0, 1, 3], [1, 2, 3]])["valid"]
+    assert not measure(square, points[:3], [[0, 1, 2]])["valid"]
+
+
 def test_the_target_verdicts_of_a_table():
     """Hand-made rows: case a meets the mean, misses the min; case b meets
     only the min (a poor element off the sharp corners, 6% over the count);

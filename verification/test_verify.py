@@ -518,3 +518,91 @@ def test_bm_meshes_of_touching_loops_pass_the_check(name):
                           holes=holes if len(holes) else None)
     assert report.ok, report.summary()
     assert report.facts["euler"] == euler
+
+
+def _triangle_examples():
+    """(name, .poly contents) of every .poly in the triangle package's data."""
+    triangle = pytest.importorskip("triangle")
+    from bubblemesh.io import read_poly
+
+    data = Path(triangle.__file__).parent / "data"
+    return [(p.name, read_poly(p)) for p in sorted(data.glob("*.poly"))]
+
+
+def _poly_input(poly):
+    data = dict(vertices=poly.vertices, segments=poly.segments)
+    if len(poly.holes):
+        data["holes"] = poly.holes
+    return data
+
+
+def _sides_in(vertices, triangles, poly):
+    """Triangles on each of ``poly``'s segments in a mesh that keeps them as edges."""
+    at = {tuple(v): i for i, v in enumerate(np.asarray(vertices).tolist())}
+    e = np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]],
+                                triangles[:, [2, 0]]]), axis=1)
+    count: dict = {}
+    for edge in map(tuple, e.tolist()):
+        count[edge] = count.get(edge, 0) + 1
+    return np.array([count.get(tuple(sorted((at[tuple(poly.vertices[a])],
+                                             at[tuple(poly.vertices[b])]))), 0)
+                     for a, b in np.asarray(poly.segments).tolist()])
+
+
+def test_pslg_sides_are_those_of_triangles_own_mesh_on_every_example():
+    """pslg_sides (faces traced exactly, holes eaten) against Triangle itself:
+    its -p mesh of each .poly in its data keeps every segment as an edge, and
+    the triangles on a segment are the sides the domain lies on.  Among the
+    examples: la.poly (133 interior constraints), face.poly (2), box.poly
+    (no closed loop: Triangle eats everything)."""
+    from bubblemesh.verify.domain import pslg_sides
+
+    triangle = pytest.importorskip("triangle")
+    interior = {}
+    for name, poly in _triangle_examples():
+        out = triangle.triangulate(_poly_input(poly), "p")
+        tri = out.get("triangles", np.zeros((0, 3), np.int64)).astype(np.int64)
+        want = _sides_in(out["vertices"], tri, poly)
+        got = pslg_sides(poly.vertices, poly.segments, poly.holes)
+        np.testing.assert_array_equal(got, want, err_msg=name)
+        interior[name] = int((got == 2).sum())
+    assert interior["la.poly"] > 100 and interior["face.poly"] > 0 and interior["A.poly"] == 0
+
+
+def test_quality_meshes_of_every_triangle_example_check_as_triangle_reads_them(tmp_path):
+    """Triangle's -pq30 mesh of each example passes check_file with the .poly
+    as boundary (interior constraints and all), through a meshio file; the
+    same mesh of la.poly made without its interior segments fails on them,
+    and one with half of a square cut away by a constraint fails as
+    one-sided."""
+    meshio = pytest.importorskip("meshio")
+    triangle = pytest.importorskip("triangle")
+    for name, poly in _triangle_examples():
+        out = triangle.triangulate(_poly_input(poly), "pq30")
+        if "triangles" not in out:
+            continue  # box.poly: nothing is left
+        path = tmp_path / f"{name}.vtu"
+        meshio.write(path, meshio.Mesh(np.column_stack([out["vertices"],
+                                                        np.zeros(len(out["vertices"]))]),
+                                       [("triangle", out["triangles"])]))
+        data = Path(triangle.__file__).parent / "data" / name
+        report = verify.check_file(path, boundary=data)
+        assert report.ok, (name, report.summary())
+
+    from bubblemesh.verify.domain import pslg_sides
+
+    poly = dict(_triangle_examples())["la.poly"]
+    sides = pslg_sides(poly.vertices, poly.segments, poly.holes)
+    outer = dict(vertices=poly.vertices, segments=poly.segments[sides == 1])
+    out = triangle.triangulate(outer, "pq30")
+    report = verify.check(out["vertices"], out["triangles"].astype(np.int64), poly.segments,
+                          poly.vertices, holes=poly.holes, sides="pslg")
+    assert report.count("missing_segment") > 50 and not report.count("interior_segment")
+
+    square = np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float)
+    cut = np.array([(0, 1), (1, 2), (2, 3), (3, 0), (0, 2)])
+    half = np.array([(0, 1, 2)])
+    report = verify.check(square[:3], half, cut, square, sides="pslg")
+    assert report.count("one_sided_constraint") == 1 and report.count("area")
+    assert not verify.check(square, np.array([(0, 1, 2), (0, 2, 3)]), cut, square,
+                            sides="pslg").violations

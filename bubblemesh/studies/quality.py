@@ -156,7 +156,8 @@ def measure(domain, points, triangles):
     """One mesh of ``domain``: element count N, min and mean radius ratio,
     count below 0.7, that count without the elements touching an input corner
     sharper than SHARP_ANGLE, and bubblemesh.verify's exact verdict on
-    validity and conformity to the input boundary (``valid``)."""
+    validity and conformity to the input boundary and its interior
+    constraints (``valid``)."""
     from bubblemesh import verify
 
     p = np.asarray(points, dtype=np.float64)[:, :2]
@@ -165,42 +166,13 @@ def measure(domain, points, triangles):
     poor = q < 0.7
     at_sharp = _sharp_corner_flags(domain, p)[t].any(axis=1)
     holes = domain.hole_points if len(domain.hole_points) else None
-    interior = np.asarray(domain.interior)
-    report = verify.check(p, t, domain.segments[~interior], domain.points, holes=holes,
-                          delaunay=False)
-    valid = report.ok and _constraints_kept(domain.points, domain.segments[interior], p, t)
+    seg, interior = np.asarray(domain.segments), np.asarray(domain.interior, bool)
+    once = ~interior | (seg[:, 0] < seg[:, 1])  # a constraint is listed both ways
+    report = verify.check(p, t, seg[once], domain.points, holes=holes,
+                          sides=np.where(interior[once], 2, 1), delaunay=False)
+    valid = report.ok
     return dict(N=len(t), min=float(q.min()), mean=float(q.mean()), below=int(poor.sum()),
                 below_off_sharp=int((poor & ~at_sharp).sum()), valid=bool(valid))
-
-
-SPLIT_TOL = 1e-12  # bubblemesh.verify.check's default
-
-
-def _constraints_kept(nodes, constraints, points, triangles):
-    """Is every interior constraint (a, b) of ``nodes`` a chain of mesh edges
-    from a to b through the mesh nodes on it (within SPLIT_TOL of its length,
-    as bubblemesh.verify takes a split segment: a node put on it rounds)?
-    bubblemesh.verify checks the boundary loops, and the free points as input
-    nodes; constraints have the domain on both sides."""
-    e = np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]],
-                                triangles[:, [2, 0]]]), axis=1)
-    edges = set(map(tuple, e.tolist()))
-    for a, b in np.asarray(constraints).tolist():
-        if a > b:
-            continue  # each constraint is listed both ways
-        pa, pb = nodes[a], nodes[b]
-        d = pb - pa
-        pad = SPLIT_TOL * float(np.abs(d).max())
-        lo, hi = np.minimum(pa, pb) - pad, np.maximum(pa, pb) + pad
-        near = np.flatnonzero(((points >= lo) & (points <= hi)).all(axis=1))
-        off = np.abs(d[0] * (points[near, 1] - pa[1]) - d[1] * (points[near, 0] - pa[0]))
-        on = sorted(near[off <= SPLIT_TOL * float(d @ d)].tolist(),
-                    key=lambda k: float(np.dot(points[k] - pa, d)))
-        if len(on) < 2 or (points[on[0]] != pa).any() or (points[on[-1]] != pb).any():
-            return False
-        if any((min(u, v), max(u, v)) not in edges for u, v in zip(on, on[1:])):
-            return False
-    return True
 
 
 # The element density of a size field: equilateral triangles of side h per area.

@@ -13,7 +13,9 @@ What is checked (each failure a :class:`Violation` with its kind and location):
   used, no two nodes at one position;
 - conformity: each input boundary node is a mesh node bit for bit; each
   segment is a mesh edge or a chain of mesh edges along it (a split, listed in
-  ``report.splits``); the mesh boundary edges are exactly those pieces; no
+  ``report.splits``); the mesh boundary edges are exactly the boundary
+  segments' pieces, and interior constraints' pieces have triangles on both
+  sides (``sides``; a .poly is read as Triangle reads it); no
   triangle centroid outside the domain, in a hole or on a loop (exact
   even-odd rule); the areas sum to the exact domain area; V - E + F equals
   the domain's Euler number (components minus holes with the nodes where

@@ -20,7 +20,7 @@ from .conform import (
     segment_chains,
 )
 from .delaunay import check_delaunay
-from .domain import Boundary
+from .domain import Boundary, pslg_sides
 from .exact import ExactPoints
 from .measures import population_bubble_area, quality_summary, triangle_areas
 from .report import Report
@@ -28,8 +28,8 @@ from .topology import as_points, as_triangles, check_validity, euler_characteris
 
 
 def check(points, triangles, segments=None, boundary_points=None, radii=None, *,
-          holes=None, neighbors=None, oriented=False, split_tol=1e-12, allow_splits=True,
-          delaunay=True, area_rel=1e-12, limit=1000) -> Report:
+          holes=None, sides=None, neighbors=None, oriented=False, split_tol=1e-12,
+          allow_splits=True, delaunay=True, area_rel=1e-12, limit=1000) -> Report:
     """Check any 2-D triangle mesh against its input boundary; return a Report.
 
     points (N, 2), or (N, 3) with z = 0; triangles (M, 3) node ids.
@@ -40,6 +40,12 @@ def check(points, triangles, segments=None, boundary_points=None, radii=None, *,
     conformity only checks that they form loops and the Euler count).
     radii (N,): node bubble radii; adds the population criterion (eq. 6).
     holes: hole points (as in a .poly file), checked against the even-odd rule.
+    sides (K,): on how many sides of each segment the domain lies: 1 a
+    boundary segment (the default for all), 2 an interior constraint (a
+    chain of mesh edges with triangles on both sides, an obstacle to the
+    Delaunay test, not part of the loops), 0 one in a hole or outside (not
+    checked); or "pslg" for Triangle's reading of the segments and hole
+    points (:func:`bubblemesh.verify.domain.pslg_sides`).
     neighbors (M, 3): an adjacency array to check (neighbors[t, i] across the
     edge opposite vertex i, -1 on the boundary).  oriented: segments run with
     the domain on their left, and the mesh must agree.  split_tol: a mesh node
@@ -60,7 +66,7 @@ def check(points, triangles, segments=None, boundary_points=None, radii=None, *,
     if H is None:
         return report
     report.facts["edges"] = len(H.keys)
-    domain, obstacles = _conformity(E, H, tri, report, segments, bpts, holes, oriented,
+    domain, obstacles = _conformity(E, H, tri, report, segments, bpts, holes, sides, oriented,
                                     split_tol, allow_splits, area_rel, n)
     if delaunay:
         facts = check_delaunay(E, H, positive, obstacles, report)
@@ -79,8 +85,22 @@ def check(points, triangles, segments=None, boundary_points=None, radii=None, *,
     return report
 
 
-def _conformity(E, H, tri, report, segments, bpts, holes, oriented, split_tol, allow_splits,
-                area_rel, n):
+def _sides(sides, seg, bpts, holes):
+    """The (K,) sides array of :func:`check` (all 1 by default)."""
+    if sides is None:
+        return np.ones(len(seg), np.int64)
+    if isinstance(sides, str):
+        if sides != "pslg":
+            raise ValueError(f"sides must be an array or 'pslg', got {sides!r}")
+        return pslg_sides(bpts, seg, holes)
+    out = np.asarray(sides)
+    if out.shape != (len(seg),) or not np.isin(out, (0, 1, 2)).all():
+        raise ValueError(f"sides must hold 0, 1 or 2 for each of the {len(seg)} segments")
+    return out.astype(np.int64)
+
+
+def _conformity(E, H, tri, report, segments, bpts, holes, sides, oriented, split_tol,
+                allow_splits, area_rel, n):
     """Boundary loops, node mapping, segment chains, boundary edges, inside, area, Euler."""
     if segments is None:
         b = H.boundary()
@@ -103,15 +123,32 @@ def _conformity(E, H, tri, report, segments, bpts, holes, oriented, split_tol, a
         if seg.size and (seg.min() < 0 or seg.max() >= top):
             k = int(np.argmax(((seg < 0) | (seg >= top)).any(axis=1)))
             raise GeometryError(f"segment {k} {seg[k].tolist()} names a node outside [0, {top})")
+        side = _sides(sides, seg, E.points[:n] if bpts is None else bpts, holes)
+        outer, inner = np.flatnonzero(side == 1), np.flatnonzero(side == 2)
         if bpts is None:
-            domain, seg_mesh = Boundary(E, seg, holes, oriented), seg
+            domain, seg_mesh = Boundary(E, seg[outer], holes, oriented), seg
             source = f"{len(seg)} input segments over the mesh nodes"
         else:
-            domain = Boundary(E, seg + n, holes, oriented, first=n)
+            domain = Boundary(E, seg[outer] + n, holes, oriented, first=n)
             seg_mesh = map_boundary_nodes(E.points[:n], bpts, report)[seg]
             source = f"{len(seg)} input segments over {len(bpts)} boundary nodes"
-    sub, owner = segment_chains(E, H, seg_mesh, report, split_tol, allow_splits)
-    check_boundary_edges(E, H, sub, owner, report, oriented or segments is None)
+        if len(inner):
+            source += f", {len(inner)} of them interior constraints"
+        report.facts.update(constraints=len(inner), segments_unmeshed=int((side == 0).sum()))
+    if segments is not None and len(inner):
+        sub, owner = segment_chains(E, H, seg_mesh[outer], report, split_tol, allow_splits,
+                                    outer)
+        pieces, whose = segment_chains(E, H, seg_mesh[inner], report, split_tol, allow_splits,
+                                       inner)
+        check_boundary_edges(E, H, sub, owner, report, oriented, pieces, whose)
+        obstacles = np.vstack([sub, pieces])
+    else:
+        if segments is not None:
+            seg_mesh = seg_mesh[outer]
+        sub, owner = segment_chains(E, H, seg_mesh, report, split_tol, allow_splits,
+                                    None if segments is None else outer)
+        check_boundary_edges(E, H, sub, owner, report, oriented or segments is None)
+        obstacles = sub
     check_inside(E, tri, domain, report)
     total, expected, _ = check_area(E, tri, domain, report, area_rel)
     chi, want = euler_characteristic(tri, H), domain.euler()
@@ -119,7 +156,7 @@ def _conformity(E, H, tri, report, segments, bpts, holes, oriented, split_tol, a
         report.add("euler", f"V - E + F = {chi}, the domain's components - holes = {want}")
     report.facts.update(loops=len(domain.loops), euler=chi, area=total, domain_area=expected)
     report.checks["conformity"] = f"done against {source}"
-    return domain, sub
+    return domain, obstacles
 
 
 def _population(pts, tri, radii, domain, report):
@@ -155,8 +192,9 @@ def check_file(mesh_path, boundary=None, **options) -> Report:
     """Check a mesh file (any meshio format; 3-D points need z = 0).
 
     ``boundary``: a Triangle .poly path (its vertices, segments and holes are
-    the input boundary), a tuple (boundary_points, segments[, holes]), or None
-    (the mesh's own boundary edges).  Other options go to :func:`check`."""
+    the input, read as Triangle reads them: ``sides="pslg"``), a tuple
+    (boundary_points, segments[, holes]), or None (the mesh's own boundary
+    edges).  Other options go to :func:`check`."""
     points, triangles = read_mesh(mesh_path)
     if boundary is None:
         return check(points, triangles, **options)
@@ -164,6 +202,7 @@ def check_file(mesh_path, boundary=None, **options) -> Report:
         from bubblemesh.io import read_poly
 
         poly = read_poly(boundary)
+        options.setdefault("sides", "pslg")
         return check(points, triangles, poly.segments, poly.vertices, holes=poly.holes,
                      **options)
     bpts, seg, *rest = boundary

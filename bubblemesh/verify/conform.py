@@ -73,20 +73,22 @@ def _walk(E: ExactPoints, start, nbrs, A, B, tol):
     return None
 
 
-def segment_chains(E, H, seg_mesh, report, split_tol, allow_splits):
+def segment_chains(E, H, seg_mesh, report, split_tol, allow_splits, ids=None):
     """Mesh edge chain of each input segment (mesh ids); returns the sub-edges
-    (J, 2) and the input segment each comes from."""
+    (J, 2) and the input segment each comes from (its number in ``ids``, the
+    caller's numbering, when given)."""
     n_seg = len(seg_mesh)
+    ids = np.arange(n_seg) if ids is None else np.asarray(ids, np.int64)
     mapped = (seg_mesh >= 0).all(axis=1)
     direct = np.zeros(n_seg, bool)
     direct[mapped] = H.edge_count(seg_mesh[mapped, 0], seg_mesh[mapped, 1]) > 0
     sub = [seg_mesh[direct]]
-    owner = [np.nonzero(direct)[0]]
+    owner = [ids[direct]]
     todo = np.nonzero(mapped & ~direct)[0].tolist()
     if todo:
         start, nbrs = _adjacency(H)
-    for k in todo:
-        A, B = int(seg_mesh[k, 0]), int(seg_mesh[k, 1])
+    for i in todo:
+        A, B, k = int(seg_mesh[i, 0]), int(seg_mesh[i, 1]), int(ids[i])
         chain = _walk(E, start, nbrs, A, B, split_tol)
         if chain is None:
             report.add("missing_segment", f"segment {k} ({A}, {B}) {E.points[A].tolist()} -> "
@@ -102,15 +104,28 @@ def segment_chains(E, H, seg_mesh, report, split_tol, allow_splits):
     return np.concatenate(sub).astype(np.int64), np.concatenate(owner)
 
 
-def check_boundary_edges(E, H, sub, owner, report, oriented):
-    """Mesh boundary edges are exactly the segment pieces, each with the mesh on one side."""
-    count = H.edge_count(sub[:, 0], sub[:, 1])
+def check_boundary_edges(E, H, sub, owner, report, oriented, inner=None, inner_owner=None):
+    """Mesh boundary edges are exactly the segment pieces, each with the mesh
+    on one side; the pieces ``inner`` of interior constraints have it on both."""
+    if inner is not None and len(inner):
+        alone = H.edge_count(inner[:, 0], inner[:, 1]) == 1
+        for j in np.nonzero(alone)[0].tolist():
+            e = (int(inner[j, 0]), int(inner[j, 1]))
+            report.add("one_sided_constraint", f"interior constraint {int(inner_owner[j])} "
+                       f"piece {e} has triangles on one side only",
+                       segment=int(inner_owner[j]), edge=e)
+        sub = np.vstack([sub, inner[alone]])  # reported: not extra boundary edges too
+        owner = np.concatenate([owner, inner_owner[alone]])
+        keep = np.arange(len(sub)) < len(sub) - int(alone.sum())
+    else:
+        keep = np.ones(len(sub), bool)
+    count = np.where(keep, H.edge_count(sub[:, 0], sub[:, 1]), 1)
     for j in np.nonzero(count == 2)[0].tolist():
         e = (int(sub[j, 0]), int(sub[j, 1]))
         report.add("interior_segment", f"segment {int(owner[j])} piece {e} is an interior edge "
                    "(triangles on both sides)", segment=int(owner[j]), edge=e)
     if oriented:
-        wrong = (count == 1) & (H.find_directed(sub[:, 0], sub[:, 1]) < 0)
+        wrong = keep & (count == 1) & (H.find_directed(sub[:, 0], sub[:, 1]) < 0)
         for j in np.nonzero(wrong)[0].tolist():
             e = (int(sub[j, 0]), int(sub[j, 1]))
             report.add("segment_orientation", f"segment {e} has the mesh on its right "

@@ -7,9 +7,10 @@ point.  Loops may touch at nodes (two squares sharing a corner, a hole whose
 corner is on the outer boundary): where more than two segments meet, the
 loops are traced as the faces' boundaries, each leaving a node by the first
 segment clockwise from the one it came in on (exact angles), and cut into
-simple loops wherever a walk meets its own node.  Internal constraint
-segments (triangles on both sides) and open chains are not supported: every
-node is on an even number of segments.
+simple loops wherever a walk meets its own node; every node is on an even
+number of their segments.  Interior constraints (the domain on both sides)
+are not loops: :func:`pslg_sides` reads any planar straight-line graph as
+Triangle does and tells them apart.
 """
 
 from __future__ import annotations
@@ -361,3 +362,78 @@ class Boundary:
         nodes = len(set(np.asarray(self.segments).ravel().tolist()))
         sides = sum(1 if signed_area_exact(P, w) > 0 else -1 for w in face_walks(directed, P))
         return sides - (len(directed) - nodes)
+
+
+def pslg_sides(points, segments, holes=None) -> np.ndarray:
+    """Triangle's reading of a planar straight-line graph: how many sides of
+    each segment (K,) the domain lies on (2: an interior constraint, 1: the
+    boundary, 0: in a hole or outside).
+
+    The domain is every bounded face of the segments' arrangement that holds
+    no hole point (Triangle eats a hole point's face and, without -c,
+    everything outside).  The faces are traced exactly: each side of a
+    segment is followed by the first segment clockwise at its end; a walk
+    with positive area bounds a face from inside, any other walk is the
+    outline of a connected part, whose face is the smallest positive walk
+    around it.  Segments must not cross (GeometryError names a hole point on
+    a segment)."""
+    seg = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
+    hole = np.asarray(holes if holes is not None else [], np.float64).reshape(-1, 2)
+    E = ExactPoints(np.vstack([np.asarray(points, np.float64).reshape(-1, 2), hole]))
+    P, n = E.P, len(E.points) - len(hole)
+    halves = [[int(a), int(b)] for a, b in seg.tolist()] + [[int(b), int(a)]
+                                                          for a, b in seg.tolist()]
+    for a, b in halves[:len(seg)]:
+        if a == b:
+            raise GeometryError(f"segment ({a}, {b}) has zero length")
+    walks, face_of = _half_walks(halves, P)
+    areas = [signed_area_exact(P, w) for w in walks]
+    bounded = [k for k, area in enumerate(areas) if area > 0]
+
+    box = {k: (min(P[i][0] for i in walks[k]), max(P[i][0] for i in walks[k]),
+               min(P[i][1] for i in walks[k]), max(P[i][1] for i in walks[k])) for k in bounded}
+
+    def around(q):  # the smallest positive walk with q strictly inside, -1: outside all
+        near = [k for k in bounded
+                if box[k][0] < q[0] < box[k][1] and box[k][2] < q[1] < box[k][3]]
+        inside = [k for k in near if point_in_polygon(q, [P[i] for i in walks[k]]) > 0]
+        return min(inside, key=lambda k: areas[k]) if inside else -1
+
+    face = list(range(len(walks)))
+    for k, area in enumerate(areas):
+        if area <= 0:  # an outline: its face is the one around any of its nodes
+            face[k] = next((f for f in [around(P[walks[k][0]])] if f != k), -1)
+    eaten = {-1}
+    for h in range(len(hole)):
+        q = P[n + h]
+        if any(point_in_polygon(q, [P[i] for i in walks[k]]) == 0 for k in bounded
+               if box[k][0] <= q[0] <= box[k][1] and box[k][2] <= q[1] <= box[k][3]):
+            raise GeometryError(f"hole point {h} at {tuple(hole[h].tolist())} lies on a segment")
+        eaten.add(around(q))
+    domain = [face[face_of[j]] not in eaten for j in range(len(halves))]
+    return (np.array(domain[:len(seg)], np.int64) + np.array(domain[len(seg):], np.int64))
+
+
+def _half_walks(halves, points):
+    """The face walks of directed half-segments (every segment both ways) and
+    the walk of each half: after a -> b the first half leaving b clockwise
+    from b -> a (itself at a dangling end)."""
+    ends: dict[int, list[int]] = {}
+    for j, (a, _) in enumerate(halves):
+        ends.setdefault(a, []).append(j)
+    twin = len(halves) // 2
+    order = {node: _by_angle(node, out, halves, points) if len(out) > 1 else out
+             for node, out in ends.items()}
+    walk_of = [-1] * len(halves)
+    walks: list[list[int]] = []
+    for start in range(len(halves)):
+        j, walk = start, []
+        while walk_of[j] < 0:  # bounded: each step claims one half
+            walk_of[j] = len(walks)
+            walk.append(halves[j][0])
+            back = (j + twin) % len(halves)  # b -> a, leaving b
+            at = order[halves[j][1]]
+            j = at[(at.index(back) - 1) % len(at)]
+        if walk:
+            walks.append(walk)
+    return walks, walk_of

@@ -23,6 +23,7 @@ KINDS = {
     "missing_segment": "an input segment is neither a mesh edge nor a chain of mesh edges",
     "split_segment": "an input segment is a chain of mesh edges, not one edge",
     "interior_segment": "a segment (piece) has triangles on both sides",
+    "one_sided_constraint": "an interior constraint (piece) has triangles on one side only",
     "segment_orientation": "a segment has the mesh on its right (domain must be on the left)",
     "extra_boundary_edge": "a mesh boundary edge that is no segment (a gap or a missing triangle)",
     "outside_domain": "a triangle's centroid lies outside the domain, in a hole or on a loop",
