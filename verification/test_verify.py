@@ -13,6 +13,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from strategies import budget
 
 from bubblemesh import verify
 from bubblemesh.verify.delaunay import circumcircles
@@ -606,3 +609,54 @@ def test_quality_meshes_of_every_triangle_example_check_as_triangle_reads_them(t
     assert report.count("one_sided_constraint") == 1 and report.count("area")
     assert not verify.check(square, np.array([(0, 1, 2), (0, 2, 3)]), cut, square,
                             sides="pslg").violations
+
+
+@st.composite
+def _random_pslgs(draw):
+    """A 32-square, random interior integer points, a random subset of the
+    edges of their Delaunay triangulation as segments (trees, cycles,
+    interfaces touching each other), and hole points at the centroids of a
+    few of its triangles (a face a cycle closes is eaten, an open one eats
+    everything around it)."""
+    from scipy.spatial import Delaunay
+
+    n = draw(st.integers(4, 16))
+    pts = draw(st.lists(st.tuples(st.integers(1, 31), st.integers(1, 31)), min_size=n,
+                        max_size=n, unique=True))
+    P = np.vstack([[(0, 0), (32, 0), (32, 32), (0, 32)], np.array(pts, float)])
+    try:
+        tri = Delaunay(P).simplices
+    except Exception:  # noqa: BLE001 - collinear draws: the square alone
+        tri = np.zeros((0, 3), np.int64)
+    edges = sorted({tuple(sorted((int(t[k]), int(t[(k + 1) % 3])))) for t in tri
+                    for k in range(3)} - {(0, 1), (1, 2), (2, 3), (0, 3)})
+    picks = draw(st.lists(st.sampled_from(edges), max_size=12, unique=True)) if edges else []
+    segments = np.array([(0, 1), (1, 2), (2, 3), (3, 0), *picks], np.int64)
+    holes = [P[t].mean(axis=0) for t in draw(st.lists(st.sampled_from(list(tri)) if len(tri)
+                                                       else st.nothing(), max_size=2))]
+    return P, segments, np.array(holes, float).reshape(-1, 2)
+
+
+@budget(40)
+@given(_random_pslgs())
+def test_pslg_sides_agree_with_triangle_on_random_graphs(pslg):
+    """On random planar straight-line graphs, pslg_sides equals the number of
+    triangles on each segment in Triangle's -p mesh, and Triangle's -pq30
+    mesh passes the check with sides='pslg' (when anything is meshed)."""
+    from bubblemesh.verify.domain import pslg_sides
+
+    triangle = pytest.importorskip("triangle")
+    points, segments, holes = pslg
+    data = dict(vertices=points, segments=segments)
+    if len(holes):
+        data["holes"] = holes
+    plain = triangle.triangulate(data, "p")
+    tri = plain.get("triangles", np.zeros((0, 3), np.int64)).astype(np.int64)
+    poly = type("Poly", (), dict(vertices=points, segments=segments))
+    want = _sides_in(plain["vertices"], tri, poly)
+    np.testing.assert_array_equal(pslg_sides(points, segments, holes), want)
+    fine = triangle.triangulate(data, "pq30a40j")  # j: the eaten vertices dropped
+    if "triangles" in fine and len(fine["triangles"]):
+        report = verify.check(fine["vertices"], fine["triangles"].astype(np.int64), segments,
+                              points, holes=holes if len(holes) else None, sides="pslg")
+        assert report.ok, report.summary()

@@ -99,6 +99,19 @@ def _sides(sides, seg, bpts, holes):
     return out.astype(np.int64)
 
 
+def _meshed_nodes(E, domain, bpts, seg, side, n):
+    """The input nodes a mesh must hold: those of the meshed segments, and
+    those on no segment (free points) not outside the domain (exact)."""
+    needed = np.zeros(len(bpts), bool)
+    needed[seg[side > 0].ravel()] = True
+    free = np.setdiff1d(np.arange(len(bpts)), seg.ravel())
+    if len(free):
+        where = domain.locate(bpts[free], lambda k: (*E.P[n + int(free[k])], 1), 0.0,
+                              exact=True)
+        needed[free[where >= 0]] = True
+    return needed
+
+
 def _conformity(E, H, tri, report, segments, bpts, holes, sides, oriented, split_tol,
                 allow_splits, area_rel, n):
     """Boundary loops, node mapping, segment chains, boundary edges, inside, area, Euler."""
@@ -130,7 +143,8 @@ def _conformity(E, H, tri, report, segments, bpts, holes, sides, oriented, split
             source = f"{len(seg)} input segments over the mesh nodes"
         else:
             domain = Boundary(E, seg[outer] + n, holes, oriented, first=n)
-            seg_mesh = map_boundary_nodes(E.points[:n], bpts, report)[seg]
+            needed = _meshed_nodes(E, domain, bpts, seg, side, n)
+            seg_mesh = map_boundary_nodes(E.points[:n], bpts, report, needed)[seg]
             source = f"{len(seg)} input segments over {len(bpts)} boundary nodes"
         if len(inner):
             source += f", {len(inner)} of them interior constraints"

@@ -19,16 +19,18 @@ from .report import Report
 from .topology import HalfEdges
 
 
-def map_boundary_nodes(points: np.ndarray, boundary_points: np.ndarray, report: Report):
+def map_boundary_nodes(points: np.ndarray, boundary_points: np.ndarray, report: Report,
+                       needed=None):
     """Mesh node of each input boundary node at the same position (-1 if none).
 
     Positions compare as float values (so 0.0 == -0.0); anything else is a
-    ``boundary_moved`` violation naming the nearest mesh node."""
+    ``boundary_moved`` violation naming the nearest mesh node, for the
+    ``needed`` nodes (a mask; default all)."""
     index: dict[tuple[float, float], int] = {}
     for i, xy in enumerate(points.tolist()):
         index.setdefault((xy[0], xy[1]), i)
     found = np.array([index.get((x, y), -1) for x, y in boundary_points.tolist()], np.int64)
-    lost = np.nonzero(found < 0)[0]
+    lost = np.nonzero((found < 0) & (True if needed is None else needed))[0]
     if len(lost):
         from scipy.spatial import cKDTree
 
