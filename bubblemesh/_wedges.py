@@ -222,6 +222,8 @@ def zigzag_ratio(theta) -> np.ndarray:
     ratios where that reaches 0.7, else the zigzag's alone (a corner of about
     26 to 27.5 degrees: one triangle below 0.7, not every one of the zigzag)."""
     theta = np.asarray(theta, dtype=np.float64)
+    if not theta.size:  # no sharp corner: spare the searches' fixed cost
+        return np.empty(theta.shape)
     both = _best_ratio(_both_quality, theta)
     alone = _best_ratio(_zigzag_quality, theta)
     return np.where(_both_quality(theta, both) >= 0.7, both, alone)
