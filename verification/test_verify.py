@@ -660,3 +660,24 @@ def test_pslg_sides_agree_with_triangle_on_random_graphs(pslg):
         report = verify.check(fine["vertices"], fine["triangles"].astype(np.int64), segments,
                               points, holes=holes if len(holes) else None, sides="pslg")
         assert report.ok, report.summary()
+
+
+def test_crossing_or_touching_segments_are_refused_by_pslg_sides():
+    """Faces are traced only on a planar graph: two crossing diagonals, a node
+    strictly inside a wall (a T-junction) and a collinear overlap are each a
+    GeometryError naming the two segments; segments meeting at their ends
+    are not."""
+    from bubblemesh.errors import GeometryError
+    from bubblemesh.verify.domain import pslg_sides
+
+    sq = np.array([(0, 0), (4, 0), (4, 4), (0, 4), (1, 1), (3, 3), (1, 3), (3, 1), (2, 0)],
+                  float)
+    walls = [(0, 1), (1, 2), (2, 3), (3, 0)]
+    with pytest.raises(GeometryError, match="segments 4 and 5 cross"):
+        pslg_sides(sq, np.array(walls + [(4, 5), (6, 7)]))
+    with pytest.raises(GeometryError, match="segments 0 and 4 overlap or meet inside"):
+        pslg_sides(sq, np.array(walls + [(8, 2)]))
+    with pytest.raises(GeometryError, match="segments 0 and 4 overlap"):
+        pslg_sides(sq, np.array(walls + [(0, 8)]))
+    assert pslg_sides(sq, np.array([(0, 8), (8, 1)] + walls[1:] + [(4, 5)])).tolist() == [
+        1, 1, 1, 1, 1, 2]

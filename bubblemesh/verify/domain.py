@@ -22,7 +22,7 @@ import numpy as np
 
 from bubblemesh.errors import GeometryError
 
-from .exact import ExactPoints, orient_int, point_in_polygon, signed_area_exact
+from .exact import ExactPoints, orient_int, orient_signs, point_in_polygon, signed_area_exact
 
 _EPS = np.finfo(np.float64).eps
 _MAX_PAIRS = 4_000_000  # (query, segment) pairs evaluated per numpy batch
@@ -386,6 +386,7 @@ def pslg_sides(points, segments, holes=None) -> np.ndarray:
     for a, b in halves[:len(seg)]:
         if a == b:
             raise GeometryError(f"segment ({a}, {b}) has zero length")
+    _refuse_crossings(E, seg)
     walks, face_of = _half_walks(halves, P)
     areas = [signed_area_exact(P, w) for w in walks]
     bounded = [k for k, area in enumerate(areas) if area > 0]
@@ -412,6 +413,41 @@ def pslg_sides(points, segments, holes=None) -> np.ndarray:
         eaten.add(around(q))
     domain = [face[face_of[j]] not in eaten for j in range(len(halves))]
     return (np.array(domain[:len(seg)], np.int64) + np.array(domain[len(seg):], np.int64))
+
+
+def _refuse_crossings(E: ExactPoints, seg):
+    """GeometryError naming two segments that cross, or a node strictly inside
+    a segment (exact): the faces are traced only on a planar graph."""
+    p = E.points
+    lo_x, hi_x = np.minimum(p[seg[:, 0], 0], p[seg[:, 1], 0]), np.maximum(p[seg[:, 0], 0],
+                                                                          p[seg[:, 1], 0])
+    lo_y, hi_y = np.minimum(p[seg[:, 0], 1], p[seg[:, 1], 1]), np.maximum(p[seg[:, 0], 1],
+                                                                          p[seg[:, 1], 1])
+    order = np.argsort(lo_x, kind="stable")
+    reach = np.searchsorted(lo_x[order], hi_x[order], side="right")  # x-overlapping, sorted
+    for start in range(0, len(order), 4096):  # bounded blocks of pairs
+        rows = np.arange(start, min(start + 4096, len(order)))
+        counts = np.maximum(reach[rows] - rows - 1, 0)
+        i = order[np.repeat(rows, counts)]
+        j = order[np.repeat(rows + 1 - np.cumsum(counts) + counts, counts)
+                  + np.arange(counts.sum())]
+        keep = (lo_y[i] <= hi_y[j]) & (lo_y[j] <= hi_y[i])
+        i, j = i[keep], j[keep]
+        a, b, c, d = seg[i, 0], seg[i, 1], seg[j, 0], seg[j, 1]
+        abc, abd = orient_signs(E, a, b, c), orient_signs(E, a, b, d)
+        cda, cdb = orient_signs(E, c, d, a), orient_signs(E, c, d, b)
+        cross = (abc * abd < 0) & (cda * cdb < 0)
+        inside = np.zeros(len(i), bool)
+        for (s, t), (u, o) in (((a, b), (c, abc)), ((a, b), (d, abd)),
+                               ((c, d), (a, cda)), ((c, d), (b, cdb))):
+            between = ((np.minimum(p[s], p[t]) <= p[u]) & (p[u] <= np.maximum(p[s], p[t]))).all(1)
+            inside |= (o == 0) & between & (u != s) & (u != t)
+        bad = np.flatnonzero(cross | inside)
+        if len(bad):
+            k = bad[0]
+            what = "cross" if cross[k] else "overlap or meet inside one of them"
+            raise GeometryError(f"segments {int(i[k])} and {int(j[k])} {what}: split them at "
+                                "their common points first")
 
 
 def _half_walks(halves, points):
