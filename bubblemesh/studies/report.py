@@ -367,7 +367,8 @@ def _unmatched(q):
                            f"{max(n[c, 'gmsh'], n[c, 'gmsh_beyond'])}, bm {n[c, 'bm']})"
                            for c in jumped) +
                  ": there both of its meshes are rows (gmsh_beyond the farther), and bm is "
-                 "judged against the better of them.")
+                 "judged against their mean and minimum interpolated linearly in the count "
+                 "to bm's.")
     return text
 
 
