@@ -162,6 +162,7 @@ SWAP_ROUNDS = 6  # node swaps (a point inserted, then a node removed) on the cho
 SWAP_GAIN = 1e-5  # each kept only if the mesh mean rises by more than this
 FINE_WALL = 0.8  # the balance takes nodes last from the first row of walls finer than this
 BOTH_BELOW, BOTH_COUNT = 5000, 0.03  # both insertions up to this many elements (auto)
+NEITHER_COUNT, NEITHER_GAIN = 0.1, 0.5  # no count fits: a mean gain may buy a few elements
 CHANNEL_BOTH_BELOW = 200_000  # a channel's walls and the plain ones both up to this many
 OTHERS = ((True, True), (False, False))  # the other (frontal, seeded) meshes tried then
 FRONTAL_OTHERS = ((False, True), (False, False))  # those where frontal insertion is wanted
@@ -479,7 +480,10 @@ def _better(a, b, asked):
     of 0.7; or as many, and a's count within COUNT_TOL of ``asked`` (the
     field's) where b's is not; or both or neither within it, a's count within
     BOTH_COUNT of b's (quality is not bought with elements; below it too
-    where both are within COUNT_TOL) and a mean ratio higher by more than
+    where both are within COUNT_TOL; where neither is, within NEITHER_COUNT
+    if the mean gain is at least NEITHER_GAIN times the count's excess, as
+    where the domain's rows force a count the field cannot have) and a mean
+    ratio higher by more than
     MEAN_TIE with a minimum at least b's (or at least MIN_ENOUGH) less MIN_TRADE of
     the gain, at most MIN_TRADE_MAX (a minimum a hair lower, or both at a sharp
     corner's bound, does not outweigh the mean), or a mean within MEAN_TIE of b's
@@ -495,9 +499,11 @@ def _better(a, b, asked):
     if fits_a != fits_b:
         return fits_a
     fewer = fits_a and fits_b and len(qa) < len(qb)  # fewer elements buy no quality
-    if not fewer and abs(len(qa) / len(qb) - 1.0) > BOTH_COUNT:
-        return False
     gain = float(qa.mean() - qb.mean())
+    excess = abs(len(qa) / len(qb) - 1.0)
+    if not fewer and excess > BOTH_COUNT and (
+            fits_a or excess > NEITHER_COUNT or gain < NEITHER_GAIN * excess):
+        return False
     if abs(gain) <= MEAN_TIE:
         return bool(qa.min() > qb.min())
     slack = min(MIN_TRADE_MAX, MIN_TRADE * gain)

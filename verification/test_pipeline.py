@@ -451,8 +451,9 @@ def test_the_portfolio_ranking_follows_its_rule():
     the documented rule: fewer elements below 0.7 first, then a count that
     fits the field, then a higher mean with a minimum that is at least the
     other's less MIN_TRADE of the gain (at most MIN_TRADE_MAX) or at least
-    MIN_ENOUGH, at a count within BOTH_COUNT; means within MEAN_TIE ranked
-    by their minimum."""
+    MIN_ENOUGH, at a count within BOTH_COUNT (NEITHER_COUNT for a large gain
+    where neither count fits); means within MEAN_TIE ranked by their
+    minimum."""
     better, enough = pipeline._better, pipeline.MIN_ENOUGH
     n = 100
     base = _Rated(*([0.95] * (n - 1) + [0.85]))
@@ -480,6 +481,18 @@ def test_the_portfolio_ranking_follows_its_rule():
     # a higher mean bought with more than BOTH_COUNT more elements: no
     more = int(n * (1 + pipeline.BOTH_COUNT)) + 1  # still within COUNT_TOL of n
     assert not better(_Rated(*([0.96] * more)), base, n)
+    # unless neither count fits the field: then a gain of NEITHER_GAIN times the excess
+    # buys up to NEITHER_COUNT more elements (a 20 x 1 channel at area / 60 holds two
+    # rows, 114 elements or 110 where the field asks for 100), less does not
+    forced = _Rated(*([0.923] * 109 + [0.79]))
+    excess = 114 / 110 - 1
+    for gain, kept in ((1.1, True), (0.9, False)):
+        mean = 0.923 + gain * pipeline.NEITHER_GAIN * excess
+        assert better(_Rated(*([mean + 0.001] * 113 + [0.79])), forced, 100) == kept
+    far = int(110 * (1 + pipeline.NEITHER_COUNT)) + 2
+    assert not better(_Rated(*([0.99] * (far - 1) + [0.79])), forced, 100)
+    assert not better(_Rated(*([0.99] * 113 + [0.79])), _Rated(*([0.923] * 103 + [0.79])),
+                      100)  # 104 fits the field
     # means within MEAN_TIE: the higher minimum wins, whichever mean is higher
     tie = pipeline.MEAN_TIE
     lower_min = _Rated(*([0.99] * (n - 1) + [0.91]))
