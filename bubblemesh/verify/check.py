@@ -149,20 +149,13 @@ def _conformity(E, H, tri, report, segments, bpts, holes, sides, oriented, split
         if len(inner):
             source += f", {len(inner)} of them interior constraints"
         report.facts.update(constraints=len(inner), segments_unmeshed=int((side == 0).sum()))
-    if segments is not None and len(inner):
-        sub, owner = segment_chains(E, H, seg_mesh[outer], report, split_tol, allow_splits,
-                                    outer)
-        pieces, whose = segment_chains(E, H, seg_mesh[inner], report, split_tol, allow_splits,
-                                       inner)
-        check_boundary_edges(E, H, sub, owner, report, oriented, pieces, whose)
-        obstacles = np.vstack([sub, pieces])
-    else:
-        if segments is not None:
-            seg_mesh = seg_mesh[outer]
-        sub, owner = segment_chains(E, H, seg_mesh, report, split_tol, allow_splits,
-                                    None if segments is None else outer)
-        check_boundary_edges(E, H, sub, owner, report, oriented or segments is None)
-        obstacles = sub
+    if segments is None:
+        outer, inner = np.arange(len(seg_mesh)), np.zeros(0, np.int64)
+    sub, owner = segment_chains(E, H, seg_mesh[outer], report, split_tol, allow_splits, outer)
+    pieces, whose = (segment_chains(E, H, seg_mesh[inner], report, split_tol, allow_splits,
+                                    inner) if len(inner) else (sub[:0], owner[:0]))
+    check_boundary_edges(E, H, sub, owner, report, oriented or segments is None, pieces, whose)
+    obstacles = np.vstack([sub, pieces])
     check_inside(E, tri, domain, report)
     total, expected, _ = check_area(E, tri, domain, report, area_rel)
     chi, want = euler_characteristic(tri, H), domain.euler()

@@ -78,30 +78,6 @@ def _ends(seg):
     return ends
 
 
-def face_walks(seg, points) -> list[list[int]]:
-    """The closed walks around the faces left of directed segments ``seg``
-    (a list of [a, b]; every node starts as many as it ends): from each
-    segment the next is the first one leaving its end clockwise from it, so a
-    walk passes through a node where faces touch as often as it borders them."""
-    ends = _ends(seg)
-    turn = _turns(seg, ends, points)
-    used = [False] * len(seg)
-    walks = []
-    for k in range(len(seg)):
-        e, walk = k, []
-        while not used[e]:  # bounded: every step marks one segment
-            used[e] = True
-            walk.append(seg[e][0])
-            node = seg[e][1]
-            order = turn.get(node, ends[node])
-            i = order.index(e)
-            e = next(order[(i - step) % len(order)] for step in range(1, len(order) + 1)
-                     if seg[order[(i - step) % len(order)]][0] == node)
-        if walk:
-            walks.append(walk)
-    return walks
-
-
 def _other(seg, k, node):
     a, b = seg[k]
     return b if a == node else a
@@ -360,7 +336,9 @@ class Boundary:
                 ring = [(b, a) for a, b in reversed(ring)]
             directed += [list(e) for e in ring]
         nodes = len(set(np.asarray(self.segments).ravel().tolist()))
-        sides = sum(1 if signed_area_exact(P, w) > 0 else -1 for w in face_walks(directed, P))
+        walks, walk_of = _half_walks(directed + [[b, a] for a, b in directed], P)
+        inside = {walk_of[j] for j in range(len(directed))}  # the domain's side of each
+        sides = sum(1 if signed_area_exact(P, walks[w]) > 0 else -1 for w in inside)
         return sides - (len(directed) - nodes)
 
 
