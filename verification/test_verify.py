@@ -664,9 +664,9 @@ def test_pslg_sides_agree_with_triangle_on_random_graphs(pslg):
 
 def test_crossing_or_touching_segments_are_refused_by_pslg_sides():
     """Faces are traced only on a planar graph: two crossing diagonals, a node
-    strictly inside a wall (a T-junction) and a collinear overlap are each a
-    GeometryError naming the two segments; segments meeting at their ends
-    are not."""
+    strictly inside a wall (a T-junction), a collinear overlap and a wall
+    given twice are each a GeometryError naming the segments; segments
+    meeting at their ends are not."""
     from bubblemesh.errors import GeometryError
     from bubblemesh.verify.domain import pslg_sides
 
@@ -679,5 +679,7 @@ def test_crossing_or_touching_segments_are_refused_by_pslg_sides():
         pslg_sides(sq, np.array(walls + [(8, 2)]))
     with pytest.raises(GeometryError, match="segments 0 and 4 overlap"):
         pslg_sides(sq, np.array(walls + [(0, 8)]))
+    with pytest.raises(GeometryError, match=r"segment 1 \[1, 2\] is given more than once"):
+        pslg_sides(sq, np.array(walls + [(2, 1)]))
     assert pslg_sides(sq, np.array([(0, 8), (8, 1)] + walls[1:] + [(4, 5)])).tolist() == [
         1, 1, 1, 1, 1, 2]

@@ -353,8 +353,8 @@ def pslg_sides(points, segments, holes=None) -> np.ndarray:
     segment is followed by the first segment clockwise at its end; a walk
     with positive area bounds a face from inside, any other walk is the
     outline of a connected part, whose face is the smallest positive walk
-    around it.  Segments must not cross (GeometryError names a hole point on
-    a segment)."""
+    around it.  GeometryError names repeated, crossing or overlapping
+    segments, a node inside a segment, and a hole point on one."""
     seg = np.asarray(segments, dtype=np.int64).reshape(-1, 2)
     hole = np.asarray(holes if holes is not None else [], np.float64).reshape(-1, 2)
     E = ExactPoints(np.vstack([np.asarray(points, np.float64).reshape(-1, 2), hole]))
@@ -364,6 +364,11 @@ def pslg_sides(points, segments, holes=None) -> np.ndarray:
     for a, b in halves[:len(seg)]:
         if a == b:
             raise GeometryError(f"segment ({a}, {b}) has zero length")
+    _, first, count = np.unique(np.sort(seg, axis=1), axis=0, return_index=True,
+                                return_counts=True)
+    if (count > 1).any():
+        k = int(first[np.argmax(count > 1)])
+        raise GeometryError(f"segment {k} {seg[k].tolist()} is given more than once")
     _refuse_crossings(E, seg)
     walks, face_of = _half_walks(halves, P)
     areas = [signed_area_exact(P, w) for w in walks]
@@ -381,7 +386,7 @@ def pslg_sides(points, segments, holes=None) -> np.ndarray:
     face = list(range(len(walks)))
     for k, area in enumerate(areas):
         if area <= 0:  # an outline: its face is the one around any of its nodes
-            face[k] = next((f for f in [around(P[walks[k][0]])] if f != k), -1)
+            face[k] = around(P[walks[k][0]])  # its own walks have that node on them
     eaten = {-1}
     for h in range(len(hole)):
         q = P[n + h]
