@@ -176,6 +176,8 @@ STEEPER_MAX, STEEPER_STEPS = 4.0, 12  # the gradation searched up to this factor
 MEAN_TIE = 1e-4  # means closer than this are a tie, broken by the minimum
 MIN_ENOUGH = 0.9  # a mesh whose minimum stays above this is ranked by its mean
 MIN_TRADE, MIN_TRADE_MAX = 1.5, 0.005  # a mean gain may cost the minimum this times it (at most)
+CLEAR_GAIN, CLEAR_FLOOR = 0.005, 0.85  # a gain this large, the minimum kept above this,
+CLEAR_TRADE, CLEAR_TRADE_MAX = 3.0, 0.04  # may cost the minimum this times it (at most)
 UNTANGLE = 64  # at most this many triangles turned over by the frontal §2's forces are mended
 STRETCHED = 6.0  # a §2 triangle this many sizes long was never refined (_stretched)
 FRONTAL_ELEMENTS = 1000  # frontal insertion from this many elements of the cap size up
@@ -486,9 +488,10 @@ def _better(a, b, asked):
     ratio higher by more than
     MEAN_TIE with a minimum at least b's (or at least MIN_ENOUGH) less MIN_TRADE of
     the gain, at most MIN_TRADE_MAX (a minimum a hair lower, or both at a sharp
-    corner's bound, does not outweigh the mean), or a mean within MEAN_TIE of b's
-    and a higher minimum?  (A perfect lattice whose
-    walls are cut a little longer than the field's size has a few percent
+    corner's bound, does not outweigh the mean; a gain of at least CLEAR_GAIN
+    with a minimum of at least CLEAR_FLOOR may cost CLEAR_TRADE of it, at most
+    CLEAR_TRADE_MAX), or a mean within MEAN_TIE of b's and a higher minimum?
+    (A perfect lattice whose walls are cut a little longer than the field's size has a few percent
     fewer elements than a centroid mesh, both within COUNT_TOL of the
     field's.)"""
     qa, qb = a.quality(), b.quality()
@@ -507,6 +510,8 @@ def _better(a, b, asked):
     if abs(gain) <= MEAN_TIE:
         return bool(qa.min() > qb.min())
     slack = min(MIN_TRADE_MAX, MIN_TRADE * gain)
+    if gain >= CLEAR_GAIN and qa.min() >= CLEAR_FLOOR:
+        slack = max(slack, min(CLEAR_TRADE_MAX, CLEAR_TRADE * gain))
     return bool(gain > 0.0 and qa.min() >= min(qb.min(), MIN_ENOUGH) - slack)
 
 

@@ -474,10 +474,20 @@ def test_the_portfolio_ranking_follows_its_rule():
     for factor, kept in ((0.9, True), (1.1, False)):
         lowered = _Rated(*(list(small.ratios[:-1]) + [0.85 - factor * trade]))
         assert better(lowered, base, n) == kept
+    # a clear gain (CLEAR_GAIN or more) may lower a minimum that stays above CLEAR_FLOOR
+    # by CLEAR_TRADE of it (at most CLEAR_TRADE_MAX), but not below the floor
+    top = _Rated(*([0.95] * (n - 1) + [0.9]))
+    for gain in (pipeline.CLEAR_GAIN * 1.2, pipeline.CLEAR_TRADE_MAX):
+        clear = [0.95 + gain * n / (n - 1)] * (n - 1)
+        trade = min(pipeline.CLEAR_TRADE_MAX, pipeline.CLEAR_TRADE * gain)
+        for factor, kept in ((0.9, True), (1.1, False)):
+            assert better(_Rated(*(clear + [0.9 - factor * trade])), top, n) == kept
+    clear = [0.95 + 0.02 * n / (n - 1)] * (n - 1)
+    assert not better(_Rated(*(clear + [pipeline.CLEAR_FLOOR - 1e-3])), top, n)
     # a higher mean with a lower minimum that is still above MIN_ENOUGH: yes
     high = _Rated(*([0.95] * (n - 1) + [0.95]))
     assert better(_Rated(*([0.97] * (n - 1) + [enough + 0.01])), high, n)
-    assert not better(_Rated(*([0.97] * (n - 1) + [enough - 0.01])), high, n)
+    assert not better(_Rated(*([0.954] * (n - 1) + [enough - 0.01])), high, n)  # not clear
     # a higher mean bought with more than BOTH_COUNT more elements: no
     more = int(n * (1 + pipeline.BOTH_COUNT)) + 1  # still within COUNT_TOL of n
     assert not better(_Rated(*([0.96] * more)), base, n)
