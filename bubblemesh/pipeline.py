@@ -485,15 +485,15 @@ def _better(a, b, asked):
     where both are within COUNT_TOL; where neither is, within NEITHER_COUNT
     if the mean gain is at least NEITHER_GAIN times the count's excess, as
     where the domain's rows force a count the field cannot have) and a mean
-    ratio higher by more than
-    MEAN_TIE with a minimum at least b's (or at least MIN_ENOUGH) less MIN_TRADE of
-    the gain, at most MIN_TRADE_MAX (a minimum a hair lower, or both at a sharp
-    corner's bound, does not outweigh the mean; a gain of at least CLEAR_GAIN
-    with a minimum of at least CLEAR_FLOOR may cost CLEAR_TRADE of it, at most
-    CLEAR_TRADE_MAX), or a mean within MEAN_TIE of b's and a higher minimum?
-    (A perfect lattice whose walls are cut a little longer than the field's size has a few percent
-    fewer elements than a centroid mesh, both within COUNT_TOL of the
-    field's.)"""
+    ratio higher by more than MEAN_TIE with a minimum at least b's (or at
+    least MIN_ENOUGH) less MIN_TRADE of the gain, at most MIN_TRADE_MAX (a
+    minimum a hair lower, or both at a sharp corner's bound, does not
+    outweigh the mean; a gain of at least CLEAR_GAIN with a minimum of at
+    least CLEAR_FLOOR may cost CLEAR_TRADE of it, at most CLEAR_TRADE_MAX),
+    or a mean within MEAN_TIE of b's and a higher minimum?  (A perfect
+    lattice whose walls are cut a little longer than the field's size has a
+    few percent fewer elements than a centroid mesh, both within COUNT_TOL
+    of the field's.)"""
     qa, qb = a.quality(), b.quality()
     poor_a, poor_b = int((qa < 0.7).sum()), int((qb < 0.7).sum())
     if poor_a != poor_b:
