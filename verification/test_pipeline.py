@@ -515,6 +515,43 @@ def test_the_portfolio_ranking_follows_its_rule():
     assert better(ahead, higher_min, n) and not better(higher_min, ahead, n)
 
 
+
+class _Finish:
+    """A stand-in for the last steps: each mesh's finished version from a table."""
+
+    def __init__(self, *pairs):
+        self.made, self.calls = {id(raw): done for raw, done in pairs}, []
+
+    def __call__(self, mesh):
+        self.calls.append(mesh)
+        return self.made.get(id(mesh), mesh)
+
+
+def test_the_higher_mean_is_judged_finished_where_it_loses():
+    """_judged(a, b): a mesh a that wins outright wins without the last
+    steps, b stays where a is not better; where the one with the higher mean
+    loses, it alone is finished and judged again: its minimum lifted, it
+    wins."""
+    n = 100
+    low = _Rated(*([0.97] * (n - 1) + [0.80]))  # higher mean, too low a minimum
+    high = _Rated(*([0.95] * (n - 1) + [0.90]))
+    lifted = _Rated(*([0.97] * (n - 1) + [0.90]))
+    assert not pipeline._better(low, high, n) and pipeline._better(lifted, high, n)
+    finish = _Finish((low, lifted), (high, _Rated(*([0.951] * n))))
+    assert pipeline._judged(low, high, n, finish) == (lifted, True)
+    assert finish.calls == [low]  # the other is not finished
+    unlifted = _Finish((low, _Rated(*([0.97] * (n - 1) + [0.80]))))
+    assert pipeline._judged(low, high, n, unlifted) == (high, False)
+    held = _Finish((low, lifted))  # a lower mean that is no better: b stays, unfinished
+    assert pipeline._judged(high, low, n, held) == (low, False) and not held.calls
+    plain = _Finish((lifted, lifted))  # the higher mean wins outright: no steps
+    assert pipeline._judged(lifted, high, n, plain) == (lifted, True) and not plain.calls
+    # a lower mean that wins (b has a triangle below 0.7): b finished lifts it, and b wins
+    poor = _Rated(*([0.97] * (n - 1) + [0.65]))
+    rescued = _Rated(*([0.97] * (n - 1) + [0.88]))
+    assert pipeline._better(high, poor, n)
+    assert pipeline._judged(high, poor, n, _Finish((poor, rescued))) == (rescued, False)
+
 def _plate_with_fine_holes():
     """A 2 x 1 plate with two holes of radius 0.04 cut into 128 sides each
     (0.002 long beside a size of 0.06): the field grades out of both."""
