@@ -456,23 +456,24 @@ def test_the_portfolio_ranking_follows_its_rule():
     minimum."""
     better, enough = pipeline._better, pipeline.MIN_ENOUGH
     n = 100
-    base = _Rated(*([0.95] * (n - 1) + [0.85]))
+    low = pipeline.CLEAR_FLOOR - 0.03  # below the clear gain's floor
+    base = _Rated(*([0.95] * (n - 1) + [low]))
     # fewer poor elements wins whatever the mean
     assert better(_Rated(*([0.9] * n)), _Rated(*([0.99] * (n - 1) + [0.6])), n)
     # a count that fits the field wins over one that does not
     assert better(_Rated(*([0.9] * n)), _Rated(*([0.99] * (n + 10))), n)
     # a higher mean with a minimum at least the other's
-    assert better(_Rated(*([0.96] * (n - 1) + [0.85])), base, n)
+    assert better(_Rated(*([0.96] * (n - 1) + [low])), base, n)
     # a gain of 0.02 in the mean may lower the minimum by MIN_TRADE_MAX, not more
     drop = pipeline.MIN_TRADE_MAX
-    assert better(_Rated(*([0.97] * (n - 1) + [0.85 - 0.9 * drop])), base, n)
-    assert not better(_Rated(*([0.97] * (n - 1) + [0.85 - 1.1 * drop])), base, n)
+    assert better(_Rated(*([0.97] * (n - 1) + [low - 0.9 * drop])), base, n)
+    assert not better(_Rated(*([0.97] * (n - 1) + [low - 1.1 * drop])), base, n)
     # a gain of 0.001 only by MIN_TRADE of it
-    small = _Rated(*([0.95 + 0.001 * n / (n - 1)] * (n - 1) + [0.85]))
+    small = _Rated(*([0.95 + 0.001 * n / (n - 1)] * (n - 1) + [low]))
     gain = small.ratios.mean() - base.ratios.mean()
     trade = pipeline.MIN_TRADE * gain
     for factor, kept in ((0.9, True), (1.1, False)):
-        lowered = _Rated(*(list(small.ratios[:-1]) + [0.85 - factor * trade]))
+        lowered = _Rated(*(list(small.ratios[:-1]) + [low - factor * trade]))
         assert better(lowered, base, n) == kept
     # a clear gain (CLEAR_GAIN or more) may lower a minimum that stays above CLEAR_FLOOR
     # by CLEAR_TRADE of it (at most CLEAR_TRADE_MAX), but not below the floor
@@ -482,8 +483,12 @@ def test_the_portfolio_ranking_follows_its_rule():
         trade = min(pipeline.CLEAR_TRADE_MAX, pipeline.CLEAR_TRADE * gain)
         for factor, kept in ((0.9, True), (1.1, False)):
             assert better(_Rated(*(clear + [0.9 - factor * trade])), top, n) == kept
+    # the floor alone: a drop of about half the allowed trade, just above or below it
+    floor = pipeline.CLEAR_FLOOR
+    near = _Rated(*([0.95] * (n - 1) + [floor + 0.02]))
     clear = [0.95 + 0.02 * n / (n - 1)] * (n - 1)
-    assert not better(_Rated(*(clear + [pipeline.CLEAR_FLOOR - 1e-3])), top, n)
+    assert better(_Rated(*(clear + [floor + 1e-3])), near, n)
+    assert not better(_Rated(*(clear + [floor - 1e-3])), near, n)
     # a higher mean with a lower minimum that is still above MIN_ENOUGH: yes
     high = _Rated(*([0.95] * (n - 1) + [0.95]))
     assert better(_Rated(*([0.97] * (n - 1) + [enough + 0.01])), high, n)
