@@ -42,7 +42,7 @@ from ._sweep import (
     precedes,
 )
 from .errors import GeometryError
-from .predicates import orient2d, out_of_range, out_of_range_message
+from .predicates import flush_tiny, orient2d, out_of_range, out_of_range_message
 from .triangulation import ghost_constrained
 
 __all__ = ["Graph", "build"]
@@ -139,8 +139,10 @@ class Graph:
         self.dropped = dropped  # input vertex indices left out (outside the domain)
 
 
-def _checked_points(points: np.ndarray, what: str) -> np.ndarray:
-    P = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2)
+def _checked_points(points: np.ndarray, what: str, like=None) -> np.ndarray:
+    """(n, 2) float64 points, flushed (:func:`~bubblemesh.predicates.flush_tiny`
+    at the scale of ``like``, by default their own) and in range."""
+    P = flush_tiny(np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 2), like)
     bad = ~np.isfinite(P).all(axis=1)
     if bad.any():
         raise GeometryError(f"{what} {int(np.argmax(bad))} has a non-finite coordinate")
@@ -180,9 +182,9 @@ def build(vertices, segments, markers, *, holes=(), regions=(), mode="enclosed",
     P = _checked_points(vertices, "vertex")
     if len(P) < 3:
         raise GeometryError(f"a domain needs at least 3 vertices, got {len(P)}")
-    holes = _checked_points(np.asarray(holes, np.float64).reshape(-1, 2), "hole point")
-    regions = np.asarray(() if regions is None else regions, np.float64).reshape(-1, 4)
-    _checked_points(regions[:, :2], "region point")
+    holes = _checked_points(np.asarray(holes, np.float64).reshape(-1, 2), "hole point", P)
+    regions = np.array(() if regions is None else regions, np.float64).reshape(-1, 4)
+    regions[:, :2] = _checked_points(regions[:, :2], "region point", P)
     if flags is None:
         flags = np.full(len(np.asarray(segments).reshape(-1, 2)), INTERIOR, np.uint8)
     S, markers, flags = _unique_segments(segments, markers, flags)

@@ -32,7 +32,7 @@ from numba import njit
 
 from bubblemesh._sweep import CONFLICT_VERB, NO_CONFLICT, precedes, sweep
 from bubblemesh.errors import GeometryError
-from bubblemesh.predicates import orient2d, out_of_range, out_of_range_message
+from bubblemesh.predicates import flush_tiny, orient2d, out_of_range, out_of_range_message
 
 __all__ = ["Domain"]
 
@@ -684,7 +684,7 @@ def _checked_rings(loop_list: list) -> tuple[np.ndarray, np.ndarray]:
     rings = [_coordinates(ring, _loop_name(k)) for k, ring in enumerate(loop_list)]
     lengths = np.array([len(ring) for ring in rings], dtype=np.int64)
     offsets = np.concatenate([[0], np.cumsum(lengths)])
-    raw = rings[0] if len(rings) == 1 else np.concatenate(rings)  # astype made a copy
+    raw = flush_tiny(rings[0] if len(rings) == 1 else np.concatenate(rings))
 
     def where(q: int) -> tuple[str, int]:
         k = int(np.searchsorted(offsets, q, side="right") - 1)

@@ -19,7 +19,9 @@ MAX_COORDINATE] = [2**-100, 2**100] (about 7.9e-31 to 1.3e30).  Then the
 smallest nonzero difference of two coordinates is 2**-152, whose 4th power (the
 in-circle degree) and the error bounds stay far above the underflow threshold.
 ``out_of_range`` finds points that break this; the triangulation and the Domain
-reject them with a GeometryError.
+reject them with a GeometryError, after ``flush_tiny`` has read as 0 the
+coordinates below the range in inputs whose largest coordinate is at least
+2**52 times larger (``sin(pi)**3`` in a shape of size 17).
 
 All functions are numba ``njit(cache=True)``; they are plain Python functions
 when ``NUMBA_DISABLE_JIT=1``.
@@ -28,7 +30,7 @@ when ``NUMBA_DISABLE_JIT=1``.
 import numpy as np
 from numba import njit
 
-__all__ = ["incircle", "orient2d", "out_of_range", "out_of_range_message"]
+__all__ = ["flush_tiny", "incircle", "orient2d", "out_of_range", "out_of_range_message"]
 
 _EPS = 2.0**-53  # half an ulp of 1.0: the unit round-off of float64
 _SPLITTER = 2.0**27 + 1.0  # Dekker's splitter for 53-bit doubles
@@ -45,6 +47,22 @@ def out_of_range(points):
     bad = ~np.isfinite(magnitude) | (magnitude > MAX_COORDINATE)
     bad |= (magnitude != 0.0) & (magnitude < MIN_COORDINATE)
     return bad.any(axis=-1)
+
+
+def flush_tiny(points, like=None):
+    """``points`` (float64) with every nonzero coordinate below MIN_COORDINATE
+    in magnitude read as 0, where the largest finite coordinate (of ``like``,
+    by default of ``points``) is at least 2**52 times MIN_COORDINATE: such a
+    coordinate is below one unit in the last place of that largest one, so no
+    geometry the input can resolve moves.  Else (everything that small:
+    rescaling helps) unchanged, to be rejected."""
+    P = np.array(points, dtype=np.float64)
+    magnitude = np.abs(P)
+    scale = magnitude if like is None else np.abs(np.asarray(like, dtype=np.float64))
+    finite = scale[np.isfinite(scale)]
+    if finite.size and finite.max() >= 2.0**52 * MIN_COORDINATE:
+        P[(magnitude != 0.0) & (magnitude < MIN_COORDINATE)] = 0.0
+    return P
 
 
 def out_of_range_message(point):

@@ -229,8 +229,28 @@ def test_non_finite_coordinate_names_loop_and_node(bad):
 def test_coordinate_out_of_safe_range_is_rejected():
     message = raises_geometry([[(0.0, 0.0), (1e200, 0.0), (0.0, 1.0)]])
     assert message.startswith("loop 0 (outer) node 1 = (1e+200, 0.0) has a coordinate outside")
-    message = raises_geometry([[(0.0, 0.0), (1.0, 1e-308), (0.0, 1.0)]])
-    assert message.startswith("loop 0 (outer) node 1 = (1.0, 1e-308) has a coordinate outside")
+    # everything below the range: rescaling would help, and the message says so
+    message = raises_geometry([[(0.0, 0.0), (1e-40, 0.0), (0.0, 1e-40)]])
+    assert message.startswith("loop 0 (outer) node 1 = (1e-40, 0.0) has a coordinate outside")
+    assert message.endswith("rescale the geometry")
+
+
+@pytest.mark.parametrize("tiny", [1e-308, -2.9e-47, 2.0**-101, 5e-324])
+def test_coordinates_below_the_resolution_of_the_largest_read_as_zero(tiny):
+    """sin(pi)**3 in a shape of size 17: below one ulp of the largest
+    coordinate, so it is read as 0 (no scaling could bring both into range)."""
+    square = [(0.0, 0.0), (17.0, tiny), (17.0, 17.0), (tiny, 17.0)]
+    domain = Domain.from_loops([square])
+    assert domain.points.tolist() == [[0.0, 0.0], [17.0, 0.0], [17.0, 17.0], [0.0, 17.0]]
+    # a hole point wholly below the range is judged at the scale of the vertices
+    outer = [(-17.0, -17.0), (17.0, -17.0), (17.0, 17.0), (-17.0, 17.0)]
+    hole = [(-1.0, -1.0), (-1.0, 1.0), (1.0, 1.0), (1.0, -1.0)]
+    pslg = Domain.from_pslg([outer, hole], holes=[(tiny, tiny)], points=[(8.0, tiny)])
+    assert [8.0, 0.0] in pslg.points.tolist()
+    assert pslg.area == 34.0**2 - 4.0
+    # coordinates in range are kept bit for bit
+    kept = [(0.0, 0.0), (17.0, 2.0**-100), (17.0, 17.0), (1e-30, 17.0)]
+    assert Domain.from_loops([kept]).points.tolist() == [list(p) for p in kept]
 
 
 def test_wrong_shape_and_empty_input():
