@@ -67,8 +67,9 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    the mesh with the higher mean loses, it is judged again after the last
    steps of step 3 (:func:`_judged`: they often lift the minimum that held
    it back).  One of
-   the other two with more than BOTH_COUNT more elements than the field's
-   count or the best mesh's, whichever is fewer, is made again on the
+   the other two, or a frontal first mesh, that loses with more than
+   BOTH_COUNT more elements than the field's count or the winner's,
+   whichever is fewer, is made again on the
    user's sizes scaled to bring it back to that (:func:`_matched`: a front
    fills a narrow strip two rows deep, more than the field's integral, and
    coarsens the rest to pay for it, as Gmsh tuned to a count does), under
@@ -429,27 +430,33 @@ def _chosen(domain, field, channel, fine, insertion, notes, max_area, progress, 
             options, rescaled, finish, counted=None):
     """The best of the meshes step 4 makes on one size field (and, where
     ``rescaled`` gives the step 1 of the user's sizes times a factor, on the
-    one that brings an over-full mesh's count back to the field's or the
-    best mesh's, whichever is fewer)."""
+    one that brings an over-full loser's count back to the field's or the
+    winner's, whichever is fewer; a mesh made so is not made again)."""
     frontal = _frontal_wanted(insertion, domain, field)
 
     def portfolio(fine, channel):
         mesh = _mesh_with(domain, fine, field, frontal, True, notes, max_area, progress, clock,
                           options, channel)
+        kind = (frontal, True)  # the insertion that made mesh, None once rescaled
         if insertion == "auto" and len(mesh.triangles) <= BOTH_BELOW:
             asked = field_count(counted or field, mesh.points, mesh.triangles)
             for other_frontal, seeded in (FRONTAL_OTHERS if frontal else OTHERS):
                 other = _mesh_with(domain, fine, field, other_frontal, seeded, notes, max_area,
                                    progress, clock, options, channel)
-                goal = min(asked, len(mesh.triangles))  # the count it must not exceed
+                loser, lost = mesh, kind
                 mesh, won = _judged(other, mesh, asked, finish)
-                if not won and len(other.triangles) > (1.0 + BOTH_COUNT) * goal and rescaled:
-                    other = _matched(domain, other, goal, other_frontal, seeded, rescaled,
-                                     notes, max_area, progress, clock, options, field)
+                if won:  # a front's rows overfill narrow parts; a centroid mesh's do not
+                    lost, kind = (lost if lost and lost[0] else None), (other_frontal, seeded)
+                else:
+                    loser, lost = other, (other_frontal, seeded)
+                goal = min(asked, len(mesh.triangles))  # the count the loser must not exceed
+                if lost and len(loser.triangles) > (1.0 + BOTH_COUNT) * goal and rescaled:
+                    other = _matched(domain, loser, goal, *lost, rescaled, notes, max_area,
+                                     progress, clock, options, field)
                     if other is not None:
                         judged, won = _judged(other, mesh, asked, finish)
                         if won and _as_good(judged, mesh):
-                            mesh = judged
+                            mesh, kind = judged, None
         return mesh
 
     mesh = portfolio(fine, channel)
