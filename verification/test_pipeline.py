@@ -733,6 +733,21 @@ def test_slender_teeth_filled_two_rows_deep_keep_the_fields_count(teeth, depth, 
     assert ours >= O.radius_ratio_reference(gmsh_points, gmsh_triangles).mean()
 
 
+def _fits_the_count_and_beats_gmsh(m, domain, max_area):
+    """m's count within 5% of the field's (the quality study's adaptive
+    integral), m valid and conforming, and its mean radius ratio at least Gmsh
+    Frontal-Delaunay's on the same boundary nodes at the same count (3%)."""
+    from bubblemesh.studies import quality as Q
+
+    field = pipeline.size_field(domain, max_area=max_area)
+    assert abs(len(m.triangles) / Q.predicted_count(domain, field).count - 1) <= 0.05
+    _valid_and_conforming(m, domain)
+    gmsh_points, gmsh_triangles = Q.run_gmsh(m, field, len(m.triangles))[:2]
+    assert abs(len(gmsh_triangles) / len(m.triangles) - 1) <= 0.03
+    ours = O.radius_ratio_reference(np.asarray(m.points), np.asarray(m.triangles)).mean()
+    assert ours >= O.radius_ratio_reference(gmsh_points, gmsh_triangles).mean()
+
+
 @pytest.mark.heavy
 def test_a_small_frontal_mesh_is_matched_against_centroid_meshes(monkeypatch):
     """The shapes study's thin ring (radii 1 and 0.9, 128 nodes a loop) at
@@ -743,7 +758,6 @@ def test_a_small_frontal_mesh_is_matched_against_centroid_meshes(monkeypatch):
     centroid mesh fits it.  The count must be within 5% of the field's (the
     quality study's adaptive integral), and the mean radius ratio at least
     Gmsh Frontal-Delaunay's on the same boundary nodes at the same count."""
-    from bubblemesh.studies import quality as Q
     from bubblemesh.studies.shapes import shapes
 
     pytest.importorskip("gmsh")
@@ -758,13 +772,7 @@ def test_a_small_frontal_mesh_is_matched_against_centroid_meshes(monkeypatch):
     max_area = domain.area / 1000
     m = bm.mesh(domain, max_area=max_area)
     assert made[0] == (True, True) and {(False, True), (False, False)} <= set(made[1:])
-    field = pipeline.size_field(domain, max_area=max_area)
-    assert abs(len(m.triangles) / Q.predicted_count(domain, field).count - 1) <= 0.05
-    _valid_and_conforming(m, domain)
-    gmsh_points, gmsh_triangles = Q.run_gmsh(m, field, len(m.triangles))[:2]
-    assert abs(len(gmsh_triangles) / len(m.triangles) - 1) <= 0.03
-    ours = O.radius_ratio_reference(np.asarray(m.points), np.asarray(m.triangles)).mean()
-    assert ours >= O.radius_ratio_reference(gmsh_points, gmsh_triangles).mean()
+    _fits_the_count_and_beats_gmsh(m, domain, max_area)
 
 
 @pytest.mark.heavy
@@ -778,7 +786,6 @@ def test_an_over_full_first_mesh_that_loses_is_made_again_to_the_count(monkeypat
     integral), valid and conforming, and the mean radius ratio at least Gmsh
     Frontal-Delaunay's on the same boundary nodes at the same count (before:
     the centroid mesh, 0.9468 against Gmsh's 0.9572 on its walls)."""
-    from bubblemesh.studies import quality as Q
 
     pytest.importorskip("gmsh")
     pytest.importorskip("shapely")
@@ -799,13 +806,7 @@ def test_an_over_full_first_mesh_that_loses_is_made_again_to_the_count(monkeypat
     first = made[0]
     assert first[:2] == (True, True)
     assert any(f[:2] == (True, True) and f[2] > first[2] for f in made[1:])  # made coarser
-    field = pipeline.size_field(domain, max_area=max_area)
-    assert abs(len(m.triangles) / Q.predicted_count(domain, field).count - 1) <= 0.05
-    _valid_and_conforming(m, domain)
-    gmsh_points, gmsh_triangles = Q.run_gmsh(m, field, len(m.triangles))[:2]
-    assert abs(len(gmsh_triangles) / len(m.triangles) - 1) <= 0.03
-    ours = O.radius_ratio_reference(np.asarray(m.points), np.asarray(m.triangles)).mean()
-    assert ours >= O.radius_ratio_reference(gmsh_points, gmsh_triangles).mean()
+    _fits_the_count_and_beats_gmsh(m, domain, max_area)
 
 
 def test_a_rescaled_mesh_keeps_the_asked_fields_count_windows(monkeypatch):
