@@ -445,7 +445,7 @@ def _chosen(domain, field, channel, fine, insertion, notes, max_area, progress, 
                                    progress, clock, options, channel)
                 loser, lost = mesh, kind
                 mesh, won = _judged(other, mesh, asked, finish)
-                if won:  # a front's rows overfill narrow parts; a centroid mesh's do not
+                if won:  # only a front's first mesh: its rows overfill narrow parts
                     lost, kind = (lost if lost and lost[0] else None), (other_frontal, seeded)
                 else:
                     loser, lost = other, (other_frontal, seeded)
