@@ -19,13 +19,20 @@ A move is kept when every triangle of the patch is strictly counter-clockwise
 (exact :func:`~bubblemesh.predicates.orient2d`), within its area bound and
 at least min(its ratio before, KEEP), the patch's smallest ratio has risen by
 more than RISE and the mesh's mean ratio stays within MEAN_DROP of its value
-before the first move.  The rounds stop at the first patch that cannot be
-lifted (the mesh's minimum cannot rise past it) or after ``rounds``.  Nodes
-keep their triangles, so the mesh stays valid and conforming and boundary
-nodes never move; SLSQP (run on one BLAS thread: its LAPACK calls give
-other bits on other thread counts) and the order of the patches are
-deterministic.  A solve that fails (a zero-area or zero-length trial point
-divides by zero in :func:`ratio_rows`; scipy raising) refuses its move.
+before the first move.  A triangle none of whose nodes may move, or whose
+patch was refused, is *held*: it leads no patch and caps none, and a patch
+around it may not lower it (SLSQP bounds it at its ratio, HELD_MARGIN
+above, instead of by t).  A patch is lifted if its worst triangle is below
+POOR, or below the lowest triangle of fixed nodes (the mesh's minimum
+cannot rise past that) and, after the first FIRST_ROUNDS moves or a
+refusal, below LIFT_BELOW (a gear's forty teeth are forty such patches;
+above it the mean is worth more than the minimum).  FAILED refusals or
+``rounds`` moves end the rounds.  Nodes keep their triangles,
+so the mesh stays valid and conforming and boundary nodes never move;
+SLSQP (run on one BLAS thread: its LAPACK calls give other bits on other
+thread counts) and the order of the patches are deterministic.  A solve
+that fails (a zero-area or zero-length trial point divides by zero in
+:func:`ratio_rows`; scipy raising) refuses its move.
 """
 
 import math
@@ -44,6 +51,11 @@ RINGS = 1  # free nodes this many rings around the worst triangle move
 TIE = 1e-3  # triangles this close to the minimum do not cap a patch's rise
 WEIGHT = 0.1  # of the patch's mean ratio against its minimum in the objective
 CAPS = 3  # caps tried per patch, each halfway back to the patch's minimum
+FAILED = 16  # patches refused, at most, before the rounds stop
+FIRST_ROUNDS = 16  # moves of any patch that can raise the minimum; then only of those
+LIFT_BELOW = 0.85  # whose worst triangle is below this
+POOR = 0.7  # patches worse than this are lifted whatever the minimum
+HELD_MARGIN = 1e-7  # a held triangle's bound above its ratio: SLSQP ends a hair past bounds
 RISE = 1e-6  # a smaller rise of a patch's minimum is not worth its solve
 MEAN_DROP = 2e-4  # all moves together may lower the mesh's mean ratio by this much
 KEEP = 0.8  # nor take a triangle below min(its ratio, this)
@@ -98,7 +110,8 @@ class _Patch:
     absolute): the variables z are the free nodes' local x, y, then t.
     :meth:`at` evaluates :func:`ratio_rows` once per z."""
 
-    def __init__(self, X, T, free, tris, limit):
+    def __init__(self, X, T, free, tris, limit, held, least):
+        self.held, self.least = held, least  # per triangle: bounded by least, not by t
         nodes = np.unique(T[tris])
         self.corners = np.searchsorted(nodes, T[tris])
         self.free = np.searchsorted(nodes, free)
@@ -135,7 +148,8 @@ class _Patch:
 
 def _solve(patch, start, cap):
     """The free nodes' positions maximising t + WEIGHT * mean rho with rho >=
-    t on the patch, t <= cap, the areas near their bound within it."""
+    t on the patch (a held triangle's rho >= its ``least``), t <= cap, the
+    areas near their bound within it."""
     k = len(patch.rho)
     z0 = patch.start(start)
 
@@ -149,12 +163,13 @@ def _solve(patch, start, cap):
 
     def constraint(z):
         rho, area2, _, _ = patch.at(z)
-        return np.r_[rho - z[-1], (patch.limit2 - area2)[patch.near]]
+        return np.r_[rho - np.where(patch.held, patch.least, z[-1]),
+                     (patch.limit2 - area2)[patch.near]]
 
     def constraint_jacobian(z):
         _, _, d_rho, d_area2 = patch.at(z)
         J = d_rho.copy()
-        J[:, -1] = -1.0
+        J[:, -1] = np.where(patch.held, 0.0, -1.0)
         return np.vstack([J, -d_area2[patch.near]])
 
     bounds = [(None, None)] * (len(z0) - 1) + [(None, cap)]
@@ -192,25 +207,47 @@ def minmax_patches(X, T, movable, limit, rounds):
     ptr, idx = stars(T, len(X))
     q = triangle_quality(X, T)
     lowest = (float(q.mean()) - MEAN_DROP) * len(T)  # the least sum of ratios
+    held = ~movable[T].any(axis=1)  # and, in turn, those whose patch was refused
+    bar = float(q[held].min(initial=np.inf))  # the mesh's minimum cannot rise past it
+    kept = failed = 0
     with threadpool_limits(limits=1, user_api="blas"):
-        for kept in range(rounds):
-            free, tris = _around(T, ptr, idx, int(np.argmin(q)), movable)
-            if not len(free) or not _moved(X, T, q, free, tris, limit, lowest):
-                return kept
-    return rounds
+        while kept < rounds and failed < FAILED and not held.all():
+            worst = int(np.argmin(np.where(held, np.inf, q)))
+            if not _worth(float(q[worst]), bar, kept, failed):
+                break
+            free, tris = _around(T, ptr, idx, worst, movable)
+            if len(free) and _moved(X, T, q, free, tris, limit, lowest, held):
+                kept += 1
+                continue
+            held[worst] = True  # a later patch around it may still lift it
+            failed += 1
+    return kept
 
 
-def _moved(X, T, q, free, tris, limit, lowest):
+def _worth(worst, bar, kept, failed):
+    """Is a patch whose worst ratio is ``worst`` worth its solve and its share
+    of the mean: below POOR, or able to raise the mesh's minimum (below the
+    ``bar`` of the triangles of fixed nodes), after the first FIRST_ROUNDS
+    moves or a refusal only below LIFT_BELOW?"""
+    first = kept < FIRST_ROUNDS and not failed
+    return worst < POOR or (worst < bar and (first or worst < LIFT_BELOW))
+
+
+def _moved(X, T, q, free, tris, limit, lowest, held):
     """Move the ``free`` nodes of X by :func:`_solve`, its cap halved toward
     the patch's minimum while the move is refused; True if one was kept (q,
     the triangles' ratios, updated), else False (X unchanged)."""
     before = q[tris]
-    floor = float(before.min())
+    lead = ~held[tris]  # the held triangles keep their ratio but neither lead nor cap
+    if not lead.any():
+        return False
+    floor = float(before[lead].min())
     if not floor > 0.0:  # a flat triangle: its ratio's gradient divides by its area
         return False
-    patch = _Patch(X, T, free, tris, limit)
+    patch = _Patch(X, T, free, tris, limit, ~lead, before + HELD_MARGIN)
     elsewhere = np.where(q <= floor + TIE, np.inf, q)  # the worst's ties are lifted in turn
     elsewhere[tris] = np.inf
+    elsewhere[held] = np.inf
     cap = min(float(elsewhere.min()), 1.0)
     old = X[free].copy()
     others = float(q.sum()) - float(before.sum())
@@ -220,7 +257,7 @@ def _moved(X, T, q, free, tris, limit, lowest):
         X[free] = _solve(patch, floor, cap)
         if np.all(np.isfinite(X[free])) and not turned_over(X, T[tris]).any():
             after = triangle_quality(X, T[tris])
-            if (after.min() > floor + RISE and others + float(after.sum()) >= lowest
+            if (after[lead].min() > floor + RISE and others + float(after.sum()) >= lowest
                     and np.all(after >= np.minimum(before, KEEP))
                     and np.all(_areas(X, T[tris]) <= limit[tris])):
                 q[tris] = after

@@ -6,7 +6,9 @@ triangle counter-clockwise and the mesh conforming, the minimum never
 lowered nor any triangle taken below min(its ratio, KEEP), the mean within
 the MEAN_DROP budget, the area bounds kept, the same bits on a second run; a
 jittered equilateral lattice, whose optimum is known (every ratio 1), given
-back; a solver that raises leaves the mesh as it was.
+back; a solver that raises leaves the mesh as it was; a triangle no move can
+lift (its nodes fixed, or its patch refused) does not stop the rounds for
+the others.
 
 Oracles: verification/oracles.py (exact orientation and conformity, the
 radius ratio from the inradius and circumradius formulas), numpy areas."""
@@ -22,7 +24,17 @@ from strategies import budget
 from test_pipeline import corner_domains
 from test_relaxed_flips import _areas, _jittered, _lattice_patch
 
-from bubblemesh._minmax import KEEP, MEAN_DROP, minmax_patches, ratio_rows
+from bubblemesh import _minmax
+from bubblemesh._minmax import (
+    CAPS,
+    FIRST_ROUNDS,
+    KEEP,
+    LIFT_BELOW,
+    MEAN_DROP,
+    POOR,
+    minmax_patches,
+    ratio_rows,
+)
 
 coordinate = st.floats(-10.0, 10.0, allow_nan=False)
 
@@ -129,3 +141,102 @@ def test_a_failing_solver_leaves_the_mesh_as_it_was(monkeypatch, error):
     X0 = X.copy()
     assert _run(X, tri, segments, n_b, np.full(len(tri), np.inf)) == 0
     np.testing.assert_array_equal(X, X0)
+
+
+def _checked(X, tri, X0, q0, movable):
+    """The invariants of every run: fixed nodes unmoved, valid, no triangle
+    below min(its ratio, KEEP), the mean within its budget."""
+    np.testing.assert_array_equal(X[~movable], X0[~movable])
+    O.check_valid(X, tri)
+    q = O.radius_ratio_reference(X, tri)
+    assert np.all(q >= np.minimum(q0, KEEP) - 1e-12)
+    assert q.mean() >= q0.mean() - MEAN_DROP - 1e-12
+    return q
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_worst_triangle_of_fixed_nodes_does_not_stop_the_rest(seed):
+    """A triangle whose three nodes are all fixed (as at a sharp corner, the
+    wall nodes of its zigzag) cannot rise: a poor patch away from it must
+    still be lifted (the rounds used to stay on it, moving only its
+    neighbours, until one was refused), and it keeps its ratio bit for bit."""
+    X, tri, segments, n_b = _lattice_patch(3)
+    rng = np.random.default_rng(seed)
+    X[n_b:] += rng.uniform(-0.2, 0.2, X[n_b:].shape)
+    movable = np.arange(len(X)) >= n_b
+    # a triangle of two hull nodes and an interior node, that node pushed out and fixed
+    t0 = next(t for t in range(len(tri)) if (tri[t] < n_b).sum() == 2)
+    w = int(tri[t0][tri[t0] >= n_b][0])
+    hull = X[tri[t0][tri[t0] < n_b]]
+    X[w] = hull.mean(axis=0) + 0.25 * (X[w] - hull.mean(axis=0))  # a flat triangle
+    movable[w] = False
+    v = n_b + int(np.argmax(np.hypot(*(X[n_b:] - X[w]).T)))  # and one far away pushed off
+    X[v] += (0.4, 0.2)
+    q0 = O.radius_ratio_reference(X, tri)
+    O.check_valid(X, tri)
+    assert int(np.argmin(q0)) == t0 and q0[t0] < 0.6
+    X0 = X.copy()
+    near = np.unique(tri[np.isin(tri, tri[t0]).any(axis=1)])  # t0's nodes and their ring
+    far = np.flatnonzero(~np.isin(tri, near).any(axis=1))
+    assert q0[far].min() < POOR  # past a held triangle only poor ones are lifted
+    kept = minmax_patches(X, tri, movable, np.full(len(tri), np.inf), 64)
+    q = _checked(X, tri, X0, q0, movable)
+    assert kept > 0
+    assert q[t0] == q0[t0]
+    assert q[far].min() > q0[far].min() + 1e-6
+
+
+def test_a_refused_patch_does_not_stop_the_rest(monkeypatch):
+    """The worst patch refused (its solves fail): it is held, keeps its
+    ratio, and the poor triangles elsewhere (below POOR) are lifted in turn."""
+    X, tri, segments, n_b = _lattice_patch(4)
+    X[n_b:] += np.random.default_rng(5).uniform(-0.3, 0.3, X[n_b:].shape)
+    movable = np.arange(len(X)) >= n_b
+    q0 = O.radius_ratio_reference(X, tri)
+    O.check_valid(X, tri)
+    worst = int(np.argmin(q0))
+    solve, calls = _minmax._solve, []
+
+    def refusing_the_first_patch(patch, start, cap):
+        calls.append(cap)
+        if len(calls) <= CAPS:
+            return np.full((len(patch.free), 2), np.nan)
+        return solve(patch, start, cap)
+
+    monkeypatch.setattr(_minmax, "_solve", refusing_the_first_patch)
+    X0 = X.copy()
+    poor = np.flatnonzero(q0 < POOR)
+    assert len(poor) > 3
+    kept = minmax_patches(X, tri, movable, np.full(len(tri), np.inf), 64)
+    q = _checked(X, tri, X0, q0, movable)
+    assert len(calls) > CAPS and kept > 0
+    assert q[worst] >= q0[worst]
+    assert (q < POOR).sum() < len(poor)
+
+
+def _pushed(rings, push, seed=0):
+    """A lattice of ``rings`` rings with nodes at least 3 apart pushed by ``push``:
+    that many separate patches, as a gear's teeth are."""
+    X, tri, segments, n_b = _lattice_patch(rings)
+    chosen = []
+    for v in n_b + np.random.default_rng(seed).permutation(len(X) - n_b):
+        if all(np.hypot(*(X[v] - X[c])) > 2.9 for c in chosen):
+            chosen.append(v)
+    X[chosen] += push * np.c_[np.cos(np.arange(len(chosen))), np.sin(np.arange(len(chosen)))]
+    return X, tri, np.arange(len(X)) >= n_b, len(chosen)
+
+
+@pytest.mark.parametrize("push, poor", [(0.1, False), (0.5, True)])
+def test_past_the_first_rounds_only_patches_below_lift_below_are_lifted(push, poor):
+    """Separate patches: all of them lifted when they are poorer than
+    LIFT_BELOW, however many; above it only the first FIRST_ROUNDS."""
+    X, tri, movable, patches = _pushed(10, push)
+    q0 = O.radius_ratio_reference(X, tri)
+    assert patches > FIRST_ROUNDS and (q0.min() < LIFT_BELOW) == poor
+    X0 = X.copy()
+    kept = minmax_patches(X, tri, movable, np.full(len(tri), np.inf), 256)
+    q = _checked(X, tri, X0, q0, movable)
+    if poor:
+        assert kept >= patches and q.min() >= LIFT_BELOW
+    else:
+        assert kept == FIRST_ROUNDS and q.min() > q0.min()
