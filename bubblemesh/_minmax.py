@@ -27,12 +27,12 @@ POOR, or below the lowest triangle of fixed nodes (the mesh's minimum
 cannot rise past that) and, after the first FIRST_ROUNDS moves or a
 refusal, below LIFT_BELOW (a gear's forty teeth are forty such patches;
 above it the mean is worth more than the minimum).  FAILED refusals or
-``rounds`` moves end the rounds.  Nodes keep their triangles,
-so the mesh stays valid and conforming and boundary nodes never move;
-SLSQP (run on one BLAS thread: its LAPACK calls give other bits on other
-thread counts) and the order of the patches are deterministic.  A solve
-that fails (a zero-area or zero-length trial point divides by zero in
-:func:`ratio_rows`; scipy raising) refuses its move.
+``rounds`` moves end the rounds.  Nodes keep their triangles, so the mesh
+stays valid and conforming and boundary nodes never move; SLSQP (run on one
+BLAS thread: its LAPACK calls give other bits on other thread counts) and
+the order of the patches are deterministic.  A solve that fails (a zero-area
+or zero-length trial point divides by zero in :func:`ratio_rows`; scipy
+raising) refuses its move.
 """
 
 import math
@@ -238,7 +238,7 @@ def _moved(X, T, q, free, tris, limit, lowest, held):
     the patch's minimum while the move is refused; True if one was kept (q,
     the triangles' ratios, updated), else False (X unchanged)."""
     before = q[tris]
-    lead = ~held[tris]  # the held triangles keep their ratio but neither lead nor cap
+    lead = ~held[tris]  # the held triangles may rise but not fall, and neither lead nor cap
     if not lead.any():
         return False
     floor = float(before[lead].min())
