@@ -158,8 +158,7 @@ def _checked(X, tri, X0, q0, movable):
 def test_a_worst_triangle_of_fixed_nodes_does_not_stop_the_rest(seed):
     """A triangle whose three nodes are all fixed (as at a sharp corner, the
     wall nodes of its zigzag) cannot rise: a poor patch away from it must
-    still be lifted (the rounds used to stay on it, moving only its
-    neighbours, until one was refused), and it keeps its ratio bit for bit."""
+    still be lifted, and it keeps its ratio bit for bit."""
     X, tri, segments, n_b = _lattice_patch(3)
     rng = np.random.default_rng(seed)
     X[n_b:] += rng.uniform(-0.2, 0.2, X[n_b:].shape)
