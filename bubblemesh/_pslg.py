@@ -29,6 +29,7 @@ from numba import njit
 
 from ._cavity import is_ghost
 from ._cdt import BOUNDARY, INTERIOR
+from ._crossings import crossing_pairs, segment_text, split_crossings
 from ._sweep import (
     _break_ties,
     _incidence,
@@ -169,16 +170,20 @@ def _unique_segments(segments, markers, flags):
 
 
 def build(vertices, segments, markers, *, holes=(), regions=(), mode="enclosed",
-          flags=None, convex_hull=False, hull_marker=1, first_index=0) -> Graph:
+          flags=None, convex_hull=False, hull_marker=1, first_index=0,
+          split_crossing=True) -> Graph:
     """The domain of a planar straight-line graph (module docstring).
 
     ``vertices`` (N, 2); ``segments`` (K, 2) vertex indices, either way;
     ``markers`` (K,) ints; ``holes`` (H, 2) points; ``regions`` (R, 4) rows
     (x, y, attribute, max_area); ``flags`` (K,) ``BOUNDARY``/``INTERIOR`` for
     ``mode="parity"``.  A vertex strictly inside a segment splits it (as in
-    Triangle; the pieces keep the segment's marker and flag).  Raises
-    GeometryError for crossing or overlapping segments, duplicate vertices, a
-    hole or region point on a segment, and an empty domain."""
+    Triangle; the pieces keep the segment's marker and flag), and so do
+    crossing segments, at their crossing (:mod:`bubblemesh._crossings`; the
+    new vertices after the input's), unless ``split_crossing`` is False (then
+    they are named in a GeometryError).  Raises GeometryError for loops that
+    cross in parity mode, duplicate vertices, a hole or region point on a
+    segment, and an empty domain."""
     P = _checked_points(vertices, "vertex")
     if len(P) < 3:
         raise GeometryError(f"a domain needs at least 3 vertices, got {len(P)}")
@@ -189,9 +194,18 @@ def build(vertices, segments, markers, *, holes=(), regions=(), mode="enclosed",
         flags = np.full(len(np.asarray(segments).reshape(-1, 2)), INTERIOR, np.uint8)
     S, markers, flags = _unique_segments(segments, markers, flags)
     S, markers, flags = _unique_segments(*split_at_vertices(P, S, markers, flags))
-    if mode == "enclosed":
-        flags = np.full(len(S), INTERIOR, np.uint8)  # every segment blocks the eating
-    tri, nbr, con, ntri = ghost_constrained(P, np.ascontiguousarray(S), flags)
+    given = len(P)
+    try:
+        tri, nbr, con, ntri = _triangulated(P, S, flags, mode)
+    except GeometryError:
+        # segments that cross are split there, as Triangle does; any other fault stands
+        if not split_crossing:
+            _refuse_crossings(P, S)
+        P, S2, markers, flags = split_crossings(P, S, markers, flags, mode == "parity")
+        if len(S2) == len(S):
+            raise
+        S, markers, flags = _unique_segments(*split_at_vertices(P, S2, markers, flags))
+        tri, nbr, con, ntri = _triangulated(P, S, flags, mode)
     tri, nbr, con = tri[:ntri], nbr[:ntri], con[:ntri]
     ghost = (tri < 0).any(axis=1)
     if convex_hull:
@@ -213,7 +227,26 @@ def build(vertices, segments, markers, *, holes=(), regions=(), mode="enclosed",
     keep &= ~ghost
     if not keep.any():
         raise GeometryError("the segments and holes leave no domain: no triangle is enclosed")
-    return _assemble(P, S, markers, tri, nbr, con, keep, holes, regions)
+    graph = _assemble(P, S, markers, tri, nbr, con, keep, holes, regions)
+    graph.dropped = graph.dropped[graph.dropped < given]  # a crossing outside: no input
+    return graph
+
+
+def _refuse_crossings(P, S):
+    """GeometryError naming the first two segments that cross, if any."""
+    pairs = crossing_pairs(P, S)
+    if len(pairs):
+        i, j = pairs[0].tolist()
+        raise GeometryError(f"segments cross: {segment_text(P, S[i])} and "
+                            f"{segment_text(P, S[j])}")
+
+
+def _triangulated(P, S, flags, mode):
+    """:func:`ghost_constrained` of the graph; in ``enclosed`` mode every
+    segment blocks the eating (INTERIOR)."""
+    if mode == "enclosed":
+        flags = np.full(len(S), INTERIOR, np.uint8)
+    return ghost_constrained(P, np.ascontiguousarray(S), flags)
 
 
 @njit(cache=True)

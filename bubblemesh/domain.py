@@ -193,7 +193,9 @@ class Domain:
         only across a segment) minus the faces of the hole points; segments
         inside it are interior constraints, vertices on no segment free
         points, vertices outside it left out, a vertex strictly inside a
-        segment splits it (both pieces keep its marker).  ``convex_hull=True`` closes the
+        segment splits it (both pieces keep its marker), and so does the
+        point where two segments cross (rounded to the nearest float, as
+        Triangle inserts one there).  ``convex_hull=True`` closes the
         convex hull with segments first (``-c``, marker 1); the default
         (None) does so only when the segments enclose nothing.  Segment
         markers (a boundary segment marked 0 gets 1, as in Triangle), the
@@ -240,9 +242,13 @@ class Domain:
         per constraint (default: their position plus one); ``names`` maps
         names to markers; ``holes`` are extra hole points (each removes its
         face); ``regions`` rows (x, y, attribute, max_area).  Coincident nodes
-        are merged exactly; a node strictly inside a segment splits it, and
-        collinear overlapping segments merge (as in Triangle).  GeometryError
-        for crossing segments and the like, naming the items.
+        are merged exactly; a node strictly inside a segment splits it,
+        collinear overlapping segments merge, and a constraint that crosses
+        another or a loop is split with it at the crossing point, rounded to
+        the nearest float (as in Triangle; one that ends a rounding error past
+        a segment joins it at its end).  GeometryError for loops that cross
+        each other, two nodes a rounding error apart whose segments cross,
+        and the like, naming the items.
         """
         from bubblemesh._cdt import BOUNDARY, INTERIOR
 
@@ -327,19 +333,21 @@ class Domain:
         anchors = [part.representative_point().coords[0] for part in parts]
         regions = np.column_stack([np.array(anchors, np.float64).reshape(-1, 2),
                                    attribute[rows], bound[rows]])
+        # features that overlap are no partition: their crossing edges are refused
         domain = cls._from_graph(vertices, S, np.ones(len(S), np.int64), holes, regions, names,
-                                 mode="enclosed")
+                                 mode="enclosed", split_crossing=False)
         marks = np.where(domain.interior, 2, 1).astype(np.int64)
         return replace(domain, segment_markers=_read_only(marks))
 
     @classmethod
     def _from_graph(cls, vertices, segments, markers, holes, regions, names, *, mode,
                     flags=None, convex_hull=False, boundary_zero=None,
-                    first_index=0) -> Domain:
+                    first_index=0, split_crossing=True) -> Domain:
         from bubblemesh._pslg import build
 
         graph = build(vertices, segments, markers, holes=holes, regions=regions, mode=mode,
-                      flags=flags, convex_hull=convex_hull, first_index=first_index)
+                      flags=flags, convex_hull=convex_hull, first_index=first_index,
+                      split_crossing=split_crossing)
         if len(graph.dropped):  # Triangle would keep it as a node of no triangle
             v = int(graph.dropped[0])
             x, y = np.asarray(vertices, np.float64)[v].tolist()

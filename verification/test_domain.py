@@ -931,7 +931,7 @@ def test_from_poly_reads_a_node_file_when_vertex_count_is_zero(tmp_path):
         ("4 2 0 0\n1 0 0\n2 1 0\n3 0 1\n4 5 5\n3 0\n1 1 2\n2 2 3\n3 3 1\n",
          "vertex 4 at (5.0, 5.0) is on no segment of the domain and lies outside it"),
         ("4 2 0 0\n1 0 0\n2 1 0\n3 0 1\n4 1 1\n4 0\n1 1 2\n2 2 3\n3 3 1\n4 1 4\n",
-         "two segments cross"),
+         "vertex 4 at (1.0, 1.0) is on no segment of the domain and lies outside it"),
         ("3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n3 0\n1 1 2\n2 2 2\n3 3 1\n",
          "segment 2 joins vertex 2 at (1.0, 0.0) to itself"),
         ("3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n3 0\n1 1 2\n2 2 4\n3 3 1\n",
@@ -946,6 +946,14 @@ def test_from_poly_file_errors(tmp_path, text, expected):
     path.write_text(text)
     with pytest.raises(GeometryError, match=re.escape(expected)):
         Domain.from_poly(path)
+
+
+def test_from_poly_splits_crossing_segments_as_triangle_does(tmp_path):
+    (tmp_path / "x.poly").write_text("4 2 0 0\n1 0 0\n2 2 0\n3 2 2\n4 0 2\n"
+                                     "6 0\n1 1 2\n2 2 3\n3 3 4\n4 4 1\n5 1 3\n6 2 4\n0\n")
+    domain = Domain.from_poly(tmp_path / "x.poly")
+    assert domain.area == 4.0 and domain.points[-1].tolist() == [1.0, 1.0]
+    assert int(domain.interior.sum()) == 2 * 4  # both diagonals, split at the centre
 
 
 def test_from_poly_inner_loop_without_hole_point_is_a_constraint_loop(tmp_path):

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import assume, given
 from hypothesis import strategies as st
 from strategies import budget
 
@@ -178,9 +178,94 @@ def test_islands_in_holes_nest_by_parity():
     assert not np.any(inside(pond))  # the pond in the island is a hole again
 
 
-def test_crossing_constraints_are_refused():
-    with pytest.raises(GeometryError, match="cross"):
-        bm.Domain.from_pslg(loops=[SQUARE], constraints=[[(1, 1), (7, 7)], [(1, 7), (7, 1)]])
+def test_crossing_constraints_are_split_at_the_crossing():
+    cross = [[(1, 1), (7, 7)], [(1, 7), (7, 1)]]
+    d = bm.Domain.from_pslg(loops=[SQUARE], constraints=cross)
+    assert len(d.points) == 4 + 4 + 1 and d.points[-1].tolist() == [4.0, 4.0]
+    mesh = bm.mesh(d, size=1.0)
+    assert_valid(mesh, 64.0)
+    for a in [(1, 1), (7, 7), (1, 7), (7, 1)]:
+        assert_chain(mesh.points, mesh.triangles, a, (4, 4))
+
+
+def exact_crossing(p, q, r, s):
+    """The crossing point of segments pq and rs in Fractions, or None where
+    they do not cross properly (each one's ends strictly on both sides of the
+    other's line)."""
+    if not (orient(p, q, r) * orient(p, q, s) < 0 and orient(r, s, p) * orient(r, s, q) < 0):
+        return None
+    p, q = [Fraction(float(v)) for v in p], [Fraction(float(v)) for v in q]
+    t = orient(r, s, p) / (orient(r, s, p) - orient(r, s, q))
+    return p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])
+
+
+@st.composite
+def crossing_lines(draw):
+    """2-6 segments with ends drawn in (0.5, 7.5)^2 in the 8 x 8 square, no
+    two sharing an end; crossing points at least 1e-6 from every end."""
+    coord = st.floats(0.5, 7.5, allow_nan=False, allow_infinity=False)
+    n = draw(st.integers(2, 6))
+    lines = [np.array([[draw(coord), draw(coord)], [draw(coord), draw(coord)]])
+             for _ in range(n)]
+    ends = np.vstack(lines)
+    assume(len(np.unique(ends, axis=0)) == len(ends))
+    assume(all(np.hypot(*(b - a)) > 1e-3 for a, b in lines))
+    for i, (p, q) in enumerate(lines):
+        for r, s in lines[:i]:
+            x = exact_crossing(p, q, r, s)
+            if x is not None:
+                x = np.array([float(x[0]), float(x[1])])
+                assume(np.hypot(*(ends - x).T).min() > 1e-6)
+            else:
+                assume(all(orient(u, v, w) != 0 for u, v in ((p, q), (r, s))
+                           for w in ((r, s) if u is p else (p, q))))
+    return lines
+
+
+@budget(15)
+@given(crossing_lines())
+def test_crossing_constraints_meet_at_the_rounded_exact_crossing(lines):
+    """Every proper crossing (Fraction orientation) becomes one vertex at the
+    exact crossing rounded to the nearest float (Python's Fraction -> float),
+    no other vertex is added, and each constraint is a chain of mesh edges
+    through its crossings."""
+    crossings: dict = {}  # rounded point -> the lines through it
+    for i, (p, q) in enumerate(lines):
+        for j, (r, s) in enumerate(lines[:i]):
+            x = exact_crossing(p, q, r, s)
+            if x is not None:
+                crossings.setdefault((float(x[0]), float(x[1])), set()).update((i, j))
+    d = bm.Domain.from_pslg(loops=[SQUARE], constraints=lines)
+    added = {tuple(p) for p in d.points.tolist()} - {tuple(p) for p in SQUARE.tolist()} - {
+        tuple(p) for line in lines for p in line.tolist()}
+    assert added == set(crossings)
+    mesh = bm.mesh(d, size=2.0)
+    assert_valid(mesh, 64.0)
+    for i, (p, q) in enumerate(lines):
+        on = sorted([x for x, through in crossings.items() if i in through],
+                    key=lambda x: (x[0] - p[0]) * (q[0] - p[0]) + (x[1] - p[1]) * (q[1] - p[1]))
+        for u, v in zip([tuple(p), *on], [*on, tuple(q)]):
+            assert_chain(mesh.points, mesh.triangles, u, v)
+
+
+def test_a_constraint_a_rounding_error_past_a_wall_joins_it():
+    d = bm.Domain.from_pslg(loops=[SQUARE], constraints=[[(4, 4), (3, -1e-17)]])
+    assert len(d.points) == 6  # no vertex a rounding error from the constraint's end
+    mesh = bm.mesh(d, size=1.0)
+    assert_chain(mesh.points, mesh.triangles, (4, 4), (3, -1e-17))
+    assert abs(float(sum(orient(*mesh.points[t]) for t in mesh.triangles) / 2) - 64.0) < 1e-9
+
+
+def test_nearly_equal_nodes_whose_segments_cross_are_named():
+    end = (8 + 2.0 ** -47, 4 + 2.0 ** -48)  # meant to be the wall's node (8, 4), past it
+    with pytest.raises(GeometryError, match=r"nodes .* apart and their segments cross"):
+        bm.Domain.from_pslg(loops=[[(0, 0), (8, 0), (8, 4), (8, 8), (0, 8)]],
+                            constraints=[[(4, 4), end]])
+
+
+def test_crossing_loops_are_refused():
+    with pytest.raises(GeometryError, match=r"loops cross: segment \(8.0, 0.0\)-\(8.0, 8.0\)"):
+        bm.Domain.from_pslg(loops=[SQUARE, SQUARE + 4])
 
 
 def test_a_vertex_at_the_crossing_splits_both_constraints():

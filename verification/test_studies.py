@@ -749,6 +749,17 @@ def test_a_family_sweep_writes_its_table(tmp_path):
     assert written["valid"].all()
 
 
+def test_an_empty_family_sweep_writes_the_header_and_meets_nothing(tmp_path, capsys):
+    import pandas as pd
+
+    from bubblemesh.studies.families import sweep
+    from bubblemesh.studies.quality import COLUMNS
+
+    sweep("narrow", 0, 5, tmp_path)
+    assert list(pd.read_csv(tmp_path / "narrow_vs_gmsh.csv").columns) == list(COLUMNS)
+    assert "mean >= Gmsh's on 0 of 0" in capsys.readouterr().out
+
+
 def _square_with_a_crack_and_a_point():
     """A unit square with a hole, a crack from (0.2, 0.2) to (0.45, 0.7) and a
     free point at (0.75, 0.25): a PSLG a peer must keep."""

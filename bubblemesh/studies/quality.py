@@ -557,7 +557,8 @@ def quality_table(data, out_dir=None, big=False):
                   f"{r['mean']:7.4f} {r['below']:5d} {r['below_off_sharp']:4d} "
                   f"{str(r['valid']):>5s}  {wins if r is case[0] else ''}")
         rows += case
-    table = pd.DataFrame([{column: r[key] for column, key in COLUMNS.items()} for r in rows])
+    table = pd.DataFrame([{column: r[key] for column, key in COLUMNS.items()} for r in rows],
+                         columns=list(COLUMNS))  # the columns even with no rows
     print(target_summary(table))
     if out_dir is not None:
         out_dir.mkdir(parents=True, exist_ok=True)
@@ -645,7 +646,8 @@ def sweep_table(rows, out_dir=None, filename=None):
     printed, written as ``filename`` to ``out_dir`` when that is given."""
     import pandas as pd
 
-    table = pd.DataFrame([{column: r[key] for column, key in COLUMNS.items()} for r in rows])
+    table = pd.DataFrame([{column: r[key] for column, key in COLUMNS.items()} for r in rows],
+                         columns=list(COLUMNS))  # the columns even with no rows
     print(target_summary(table))
     for target, (_, missed) in target_verdicts(table).items():
         for case in missed:
