@@ -296,7 +296,9 @@ class Domain:
         row position) and the max_area of column ``max_area`` (default none;
         NaN or <= 0 for none), so ``mesh.region_attributes()`` and the area
         bounds of ``bubblemesh.mesh`` follow the features.  Markers: 1 on the
-        boundary, 2 on the interfaces (``names`` may name them).  Nothing of
+        boundary, 2 on the interfaces (``names`` may name them).  Edges of
+        features that cross (overlapping features, no partition) raise a
+        GeometryError naming two of them.  Nothing of
         geopandas is imported: any object with a ``geometry`` of shapely
         polygons (and the columns) will do."""
         try:
