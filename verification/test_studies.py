@@ -685,6 +685,45 @@ def test_the_shape_sweep_builds_valid_domains_of_the_stated_areas():
     assert len(set(names)) == len(names) == 20
 
 
+def test_the_planar_graphs_match_triangles_reading_of_the_same_graphs():
+    """Each graph of the planar-graphs set is the domain Triangle's -p makes
+    of the same vertices, segments and holes: the same area and the same
+    vertices in its triangles, the crossings Triangle inserts among them."""
+    triangle = pytest.importorskip("triangle")
+    from scipy.spatial import cKDTree
+
+    from bubblemesh.studies.shapes import planar_graph_inputs
+
+    names = []
+    for name, given in planar_graph_inputs():
+        names.append(name)
+        lines = [(np.asarray(x, float), True) for x in given["loops"]]
+        lines += [(np.asarray(x, float), False) for x in given.get("constraints", ())]
+        vertices, segments, base = [], [], 0
+        for line, loop in lines:
+            k = base + np.arange(len(line))
+            segments.append(np.column_stack([k, np.roll(k, -1)] if loop else [k[:-1], k[1:]]))
+            vertices.append(line)
+            base += len(line)
+        vertices.append(np.asarray(given.get("points", np.zeros((0, 2))), float))
+        # shared nodes once: the triangle package can crash on duplicate vertices
+        unique, index = np.unique(np.vstack(vertices), axis=0, return_inverse=True)
+        pslg = dict(vertices=unique, segments=index.ravel()[np.vstack(segments)])
+        if given.get("holes"):
+            pslg["holes"] = np.asarray(given["holes"], float)
+        theirs = triangle.triangulate(pslg, "p")
+        P, T = theirs["vertices"], theirs["triangles"]
+        u, v = P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]]
+        domain = bm.Domain.from_pslg(**given)
+        assert domain.area == pytest.approx(0.5 * np.abs(u[:, 0] * v[:, 1]
+                                                         - u[:, 1] * v[:, 0]).sum(), rel=1e-12)
+        used = np.unique(P[np.unique(T)], axis=0)
+        assert len(used) == len(domain.points), name
+        gap, _ = cKDTree(domain.points).query(used)
+        assert gap.max() <= 1e-12 * np.abs(used).max(), name
+    assert len(set(names)) == len(names) == 13
+
+
 def test_triangles_example_set_reads_every_file_with_triangles_area():
     """The triangle-examples set reads all 20 ``.poly`` files of the triangle
     package as Domains whose area is that of Triangle's own triangulation of

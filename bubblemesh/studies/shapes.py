@@ -5,12 +5,15 @@ Frontal-Delaunay and Triangle -pq30 at matched counts.
     python -m bubblemesh.studies.shapes [--sizes 50 100 200 1000] [--out DIR]
     python -m bubblemesh.studies.shapes --set rectangles --sizes 60 150 400 1200
     python -m bubblemesh.studies.shapes --set triangle-examples --sizes 100 300 1000 3000
+    python -m bubblemesh.studies.shapes --set planar-graphs --sizes 30 100 1000
 
 ``--set rectangles`` sweeps long rectangles (channels 4 to 30 times longer
 than wide) instead of the shapes; ``--set triangle-examples`` the ``.poly``
 files that ship with the ``triangle`` package (Triangle's own examples:
 holes, interior constraints, free points, a lake with islands), read by
-:meth:`bubblemesh.Domain.from_poly`.
+:meth:`bubblemesh.Domain.from_poly`; ``--set planar-graphs`` planar graphs
+of several materials (:func:`planar_graphs`, by
+:meth:`bubblemesh.Domain.from_pslg`).
 
 Every shape is meshed with max_area = area / k for each k of ``--sizes``; the
 rows are :func:`bubblemesh.studies.quality.case_rows` (Gmsh on bm's refined
@@ -101,6 +104,68 @@ def rectangles():
                                                         (0, width)], float)]
 
 
+def _box(x0, y0, x1, y1):
+    return np.array([(x0, y0), (x1, y0), (x1, y1), (x0, y1)], float)
+
+
+def _turned(loop, degrees, center):
+    a = math.radians(degrees)
+    c, s = math.cos(a), math.sin(a)
+    d = loop - center
+    return np.column_stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]]) + center
+
+
+def _closed(line):
+    return np.vstack([line, line[:1]])
+
+
+def planar_graph_inputs():
+    """(name, keywords of :meth:`bubblemesh.Domain.from_pslg`): planar graphs
+    of several materials, the inputs of FEM users: interfaces, cracks,
+    layers, inclusions, a wake line, free points, regions, and interfaces
+    that cross without a node at the crossing."""
+    yield "circle interface", dict(loops=[_box(0, 0, 4, 3)], constraints=[
+        _closed(geometry.circle((2, 1.5), 0.8, 48))])
+    yield "crack", dict(loops=[_box(0, 0, 4, 3)], constraints=[[(1, 1.5), (2.5, 1.5)]])
+    yield "layers", dict(loops=[_box(0, 0, 5, 2)],
+                         constraints=[[(0, y), (5, y)] for y in (0.4, 0.9, 1.6)])
+    turns = np.random.default_rng(3).uniform(0, 90, 5)
+    yield "rotated inclusions", dict(loops=[_box(0, 0, 4, 4)], constraints=[
+        _closed(_turned(_box(x - 0.25, y - 0.25, x + 0.25, y + 0.25), a, np.array([x, y])))
+        for (x, y), a in zip(((1, 1), (3, 1), (2, 2), (1, 3), (3, 3)), turns)])
+    yield "cracks crossing at a node", dict(loops=[_box(0, 0, 4, 4)], constraints=[
+        [(1, 2), (2, 2), (3, 2)], [(2, 1), (2, 2), (2, 3)]])
+    slant = math.radians(35)
+    yield "constraints from a wall", dict(loops=[_box(0, 0, 6, 2)], constraints=[
+        [(2, 0), (2, 1.2)], [(4, 0), (4 + 1.5 * math.cos(slant), 1.5 * math.sin(slant))]])
+    yield "zigzag interface", dict(loops=[_box(0, 0, 6, 2)], constraints=[
+        np.column_stack([np.linspace(0, 6, 9), 1 + 0.4 * (-1.0) ** np.arange(9)])])
+    foil = geometry.naca_airfoil(0.12, 30, sharp=True)
+    edge = foil[np.argmax(foil[:, 0])]
+    yield "airfoil with a wake line", dict(loops=[_box(-1, -1, 3, 1), foil],
+                                           constraints=[[edge, (3, edge[1])]],
+                                           holes=[(0.3, 0.0)])
+    yield "free points", dict(loops=[_box(0, 0, 3, 3)],
+                              points=np.random.default_rng(5).uniform(0.3, 2.7, (20, 2)))
+    yield "checkerboard", dict(loops=[_box(0, 0, 3, 3)], constraints=[
+        [(x, 0), (x, 3)] for x in (1, 2)] + [[(0, y), (3, y)] for y in (1, 2)])
+    outer, inner = geometry.circle((0, 0), 2, 72), geometry.circle((0, 0), 1, 36)
+    yield "annulus with spokes", dict(loops=[outer, inner], constraints=[
+        [inner[6 * k], outer[12 * k]] for k in range(6)], holes=[(0.0, 0.0)])
+    yield "skewed grid of interfaces", dict(loops=[_box(0, 0, 5, 3)], constraints=[
+        [(0.2, 0.3 + 0.5 * k), (4.8, 0.9 + 0.45 * k)] for k in range(4)] + [
+        [(0.4 + 1.1 * k, 0.1), (0.9 + 0.9 * k, 2.9)] for k in range(4)])
+    yield "two materials with regions", dict(loops=[_box(0, 0, 4, 2)],
+                                             constraints=[[(2, 0), (2, 2)]],
+                                             regions=[(1, 1, 1, 0), (3, 1, 2, 0)])
+
+
+def planar_graphs():
+    """(name, domain) for each of :func:`planar_graph_inputs`."""
+    for name, given in planar_graph_inputs():
+        yield name, bm.Domain.from_pslg(**given)
+
+
 def triangle_examples():
     """(name, domain): every ``.poly`` file in the ``triangle`` package's
     data directory, by name."""
@@ -110,7 +175,8 @@ def triangle_examples():
         yield path.name, bm.Domain.from_poly(path)
 
 
-SETS = {"shapes": shapes, "rectangles": rectangles, "triangle-examples": triangle_examples}
+SETS = {"shapes": shapes, "rectangles": rectangles, "triangle-examples": triangle_examples,
+        "planar-graphs": planar_graphs}
 
 
 def sweep(sizes=SIZES, out_dir=None, names=None, which="shapes"):
@@ -137,8 +203,8 @@ def main():
                         help="mesh each shape with max_area = area / k for each k")
     parser.add_argument("--only", nargs="+", default=None, help="only these shapes")
     parser.add_argument("--set", choices=sorted(SETS), default="shapes", dest="which",
-                        help="the shapes a user would bring, long rectangles or "
-                        "Triangle's example files")
+                        help="the shapes a user would bring, long rectangles, "
+                        "Triangle's example files or planar graphs")
     parser.add_argument("--out", type=Path, default=None,
                         help="write shapes_vs_gmsh.csv (rectangles_vs_gmsh.csv) here")
     args = parser.parse_args()
