@@ -30,7 +30,7 @@ from ._cdt import BOUNDARY
 from .errors import GeometryError
 from .predicates import orient2d
 
-__all__ = ["split_crossings"]
+__all__ = ["crossing_pairs", "segment_text", "split_crossings"]
 
 TOUCH = 1e-9  # a crossing this close to an end (share of the longer segment) is at it
 ROUNDS = 8  # rounds of splits: a rounded crossing point may make another crossing

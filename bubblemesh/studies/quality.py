@@ -544,8 +544,6 @@ def quality_table(data, out_dir=None, big=False):
     every case of :func:`table_cases` (:func:`case_rows`): printed with the
     winners and :func:`target_summary`, written as quality_vs_gmsh.csv to
     ``out_dir`` if given; returns that table (a DataFrame)."""
-    import pandas as pd
-
     print(f"{'case':26s} {'mesher':11s} {'N':>7s} {'N/pred':>6s} {'min':>6s} {'mean':>7s} "
           f"{'<0.7':>5s} {'off':>4s} {'valid':>5s}  winners (mean / min / <0.7)")
     rows = []
@@ -557,8 +555,7 @@ def quality_table(data, out_dir=None, big=False):
                   f"{r['mean']:7.4f} {r['below']:5d} {r['below_off_sharp']:4d} "
                   f"{str(r['valid']):>5s}  {wins if r is case[0] else ''}")
         rows += case
-    table = pd.DataFrame([{column: r[key] for column, key in COLUMNS.items()} for r in rows],
-                         columns=list(COLUMNS))  # the columns even with no rows
+    table = _frame(rows)
     print(target_summary(table))
     if out_dir is not None:
         out_dir.mkdir(parents=True, exist_ok=True)
@@ -640,14 +637,20 @@ def print_case(label, case):
           f"{gmsh['min']:.4f}  <0.7 off-corner {ours['below_off_sharp']}", flush=True)
 
 
+def _frame(rows):
+    """The rows of :func:`case_rows` as a DataFrame in the COLUMNS of
+    quality_vs_gmsh.csv (the columns even with no rows)."""
+    import pandas as pd
+
+    return pd.DataFrame([{column: r[key] for column, key in COLUMNS.items()} for r in rows],
+                        columns=list(COLUMNS))
+
+
 def sweep_table(rows, out_dir=None, filename=None):
     """The sweep's rows (:func:`case_rows`) as a DataFrame in the COLUMNS of
     quality_vs_gmsh.csv, :func:`target_summary` and each missed target
     printed, written as ``filename`` to ``out_dir`` when that is given."""
-    import pandas as pd
-
-    table = pd.DataFrame([{column: r[key] for column, key in COLUMNS.items()} for r in rows],
-                         columns=list(COLUMNS))  # the columns even with no rows
+    table = _frame(rows)
     print(target_summary(table))
     for target, (_, missed) in target_verdicts(table).items():
         for case in missed:
