@@ -179,13 +179,17 @@ def test_islands_in_holes_nest_by_parity():
 
 
 def test_crossing_constraints_are_split_at_the_crossing():
+    """The domain is the one given the crossing as a node (which the next
+    test meshes): the same points and segments."""
     cross = [[(1, 1), (7, 7)], [(1, 7), (7, 1)]]
     d = bm.Domain.from_pslg(loops=[SQUARE], constraints=cross)
+    given = bm.Domain.from_pslg(loops=[SQUARE], constraints=cross, points=[(4, 4)])
     assert len(d.points) == 4 + 4 + 1 and d.points[-1].tolist() == [4.0, 4.0]
-    mesh = bm.mesh(d, size=1.0)
-    assert_valid(mesh, 64.0)
-    for a in [(1, 1), (7, 7), (1, 7), (7, 1)]:
-        assert_chain(mesh.points, mesh.triangles, a, (4, 4))
+
+    def edges(domain):
+        return {tuple(map(tuple, domain.points[s].tolist())) for s in domain.segments}
+
+    assert edges(d) == edges(given) and d.area == given.area == 64.0
 
 
 def exact_crossing(p, q, r, s):
@@ -222,13 +226,14 @@ def crossing_lines(draw):
     return lines
 
 
-@budget(15)
+@budget(30)
 @given(crossing_lines())
 def test_crossing_constraints_meet_at_the_rounded_exact_crossing(lines):
     """Every proper crossing (Fraction orientation) becomes one vertex at the
     exact crossing rounded to the nearest float (Python's Fraction -> float),
-    no other vertex is added, and each constraint is a chain of mesh edges
-    through its crossings."""
+    no other vertex is added, and each constraint is the chain of domain
+    segments through its crossings in order (the mesher keeps every segment:
+    the tests above and below)."""
     crossings: dict = {}  # rounded point -> the lines through it
     for i, (p, q) in enumerate(lines):
         for j, (r, s) in enumerate(lines[:i]):
@@ -236,16 +241,20 @@ def test_crossing_constraints_meet_at_the_rounded_exact_crossing(lines):
             if x is not None:
                 crossings.setdefault((float(x[0]), float(x[1])), set()).update((i, j))
     d = bm.Domain.from_pslg(loops=[SQUARE], constraints=lines)
-    added = {tuple(p) for p in d.points.tolist()} - {tuple(p) for p in SQUARE.tolist()} - {
+    at = {p: k for k, p in enumerate(map(tuple, d.points.tolist()))}
+    added = set(at) - {tuple(p) for p in SQUARE.tolist()} - {
         tuple(p) for line in lines for p in line.tolist()}
     assert added == set(crossings)
-    mesh = bm.mesh(d, size=2.0)
-    assert_valid(mesh, 64.0)
+    segments = {tuple(s) for s in d.segments[d.interior].tolist()}
     for i, (p, q) in enumerate(lines):
         on = sorted([x for x, through in crossings.items() if i in through],
                     key=lambda x: (x[0] - p[0]) * (q[0] - p[0]) + (x[1] - p[1]) * (q[1] - p[1]))
-        for u, v in zip([tuple(p), *on], [*on, tuple(q)]):
-            assert_chain(mesh.points, mesh.triangles, u, v)
+        chain = [at[tuple(p)], *(at[x] for x in on), at[tuple(q)]]
+        for u, v in zip(chain[:-1], chain[1:]):
+            assert (u, v) in segments and (v, u) in segments, (p, q)
+    pieces = sum(1 + sum(i in through for through in crossings.values())
+                 for i in range(len(lines)))
+    assert len(segments) == 2 * pieces  # both ways, and no other split
 
 
 def test_a_constraint_a_rounding_error_past_a_wall_joins_it():
