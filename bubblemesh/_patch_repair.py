@@ -38,7 +38,10 @@ the element count into a window: a node removed where the mesh is most
 crowded for the size field (if none of those can go, as when they are all
 in the walls' first row, the most crowded off it, the mesh's mean kept
 within INNER_DROP of its value before the balance), or inserted where it is
-sparsest, never lowering the mesh's smallest ratio."""
+sparsest, never lowering the mesh's smallest ratio.  :func:`prune_nodes`
+removes free nodes only where that raises the mesh mean, the count kept
+above a floor: a node that §2 put between fixed points, where the field asked
+for one but the points left no good place."""
 
 import numpy as np
 from numba import njit
@@ -447,3 +450,27 @@ def _apply(X, T, limit, free, alive, old, best):
     T = np.concatenate([T[rest], made])
     limit = np.concatenate([limit[rest], np.full(len(made), bound)])
     return X, T, limit, free, alive, old
+
+
+def prune_nodes(X, T, segments, movable, limit, least, rounds, halvings, steps, gain,
+                floor=0.0):
+    """While the element count stays at least ``least`` and the removal
+    raises the mesh mean by more than ``gain``, remove a free node: of the
+    MEAN_CANDIDATES whose stars have the lowest mean ratio, the one whose
+    removal leaves the highest mesh mean, none of the changed triangles
+    below the mesh's minimum nor below ``floor`` (a sharp corner's triangle
+    can hold the minimum far lower), the area bounds kept.  Unlike
+    :func:`balance_count`, which removes where the mesh is most crowded to
+    meet a count, this removes only what pays.  The rest and the result as
+    :func:`repair_worst`."""
+    def pick(X, T, q, ptr, idx, free, limit, walls):
+        if len(T) - 2 < least:
+            return None
+        star_mean = np.bincount(T.ravel(), np.repeat(q, 3), len(X)) / np.maximum(
+            np.diff(ptr), 1)
+        star_mean[~free] = np.inf
+        return _best_of(X, T, q, ptr, idx, _removals(T, ptr, idx, star_mean, MEAN_CANDIDATES),
+                        free, limit, walls, halvings, steps, max(float(q.min(initial=1.0)), floor),
+                        float(q.mean()) + gain, True)
+
+    return _rounds(X, T, segments, movable, limit, rounds, pick)

@@ -44,7 +44,10 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    mesh is most crowded.  Once the mesh is chosen (step 4), in meshes of at
    most BALANCE_BELOW elements, nodes are swapped while that raises the
    mean: a point inserted where the mesh is sparsest, a node removed where
-   it is most crowded, the count unchanged (:func:`_swapped`).  In meshes of
+   it is most crowded, the count unchanged (:func:`_swapped`); then free
+   nodes are removed while each raises the mean, the count kept within
+   PRUNE_WINDOW under the field's and PRUNE_SHARE under its own
+   (:func:`_pruned`).  In meshes of
    at most FINAL_BELOW elements the free nodes around the worst triangles
    move together to lift their smallest ratio (:mod:`bubblemesh._minmax`:
    one node alone is often held there by its neighbours), then a last sweep
@@ -116,7 +119,7 @@ from ._lattice import lattice_points
 from ._mesh import GenerationStats, Mesh, OptimizationStats, _half_mean_edge
 from ._minmax import minmax_patches
 from ._odt import mean_polish, odt_smooth
-from ._patch_repair import RISE, balance_count, repair_worst
+from ._patch_repair import RISE, balance_count, prune_nodes, repair_worst
 from ._relaxed_flips import relaxed_flips
 from ._rings import node_adjacency, ring_neighbors, vertex_triangles
 from ._seeds import frontal_seeds, inside
@@ -164,6 +167,9 @@ BALANCE_SHARE = 0.05  # nor when the count is further off than this share of the
 BALANCE_BELOW = 20_000  # and only in meshes this small (in larger, 32 nodes are < 0.4%)
 SWAP_ROUNDS = 6  # node swaps (a point inserted, then a node removed) on the chosen mesh
 SWAP_GAIN = 1e-5  # each kept only if the mesh mean rises by more than this
+PRUNE_ROUNDS = 32  # free nodes removed at most, each for a rise of the mean over SWAP_GAIN
+PRUNE_WINDOW = 0.03  # while the count stays within this share under the field's
+PRUNE_SHARE = 0.01  # and within this share under its own: the ranking chose the mesh at it
 FINE_WALL = 0.8  # the balance takes nodes last from the first row of walls finer than this
 BOTH_BELOW, BOTH_COUNT = 5000, 0.03  # both insertions up to this many elements (auto)
 NEITHER_COUNT, NEITHER_GAIN = 0.1, 0.5  # no count fits: a mean gain may buy a few elements
@@ -348,14 +354,16 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
 
 
 def _finisher(max_area, field):
-    """The last steps on a chosen mesh (step 3: the node swaps, the joint
-    min-max moves, the last mean polish) as a function of the mesh, each
-    mesh finished once: a finished mesh is its own finish."""
+    """The last steps on a chosen mesh (step 3: the node swaps, the
+    removals that pay, the joint min-max moves, the last mean polish) as a
+    function of the mesh, each mesh finished once: a finished mesh is its
+    own finish."""
     done = {}
 
     def finish(mesh):
         if id(mesh) not in done:
-            made = _polished(_minmaxed(_swapped(mesh, max_area, field), max_area), max_area)
+            made = _pruned(_swapped(mesh, max_area, field), max_area, field)
+            made = _polished(_minmaxed(made, max_area), max_area)
             done[id(mesh)] = (mesh, made)  # the mesh held so that its id stays its own
             done[id(made)] = (made, made)
         return done[id(mesh)][1]
@@ -1249,6 +1257,40 @@ def _swapped(mesh, max_area, field):
     stats = replace(mesh.optimization, repairs=mesh.optimization.repairs + 2 * swaps,
                     min_ratio=_smallest_ratio(X, T))
     return replace(mesh, points=X, triangles=T, neighbors=N, radii=radii, optimization=stats)
+
+
+def _pruned(mesh, max_area, field):
+    """Free nodes removed from the chosen mesh, if it has at most
+    BALANCE_BELOW elements, while each removal raises the mesh mean by more
+    than SWAP_GAIN and leaves the count within PRUNE_WINDOW under the
+    field's and PRUNE_SHARE under the mesh's own
+    (:func:`~bubblemesh._patch_repair.prune_nodes`: of the nodes whose stars
+    have the lowest mean, the removal leaving the highest mesh mean, no
+    changed triangle below the mesh's minimum or POOR_RATIO, the area bounds
+    kept); PRUNE_ROUNDS at most.  It pays most where input points are fixed
+    inside the domain: §2 fills the gaps between them with nodes the field
+    asks for but the points leave no good place for (three or six triangles
+    near 0.78 around a node in one triangle of an otherwise regular set).
+    The share keeps the count near the one the ranking chose the mesh at: a
+    mesh under 200 elements loses no node."""
+    X, T = mesh.points, mesh.triangles
+    if not PRUNE_ROUNDS or len(T) > BALANCE_BELOW:
+        return mesh
+    segments = np.asarray(mesh.segments)
+    movable = np.arange(len(X)) >= mesh.n_boundary
+    movable[np.unique(segments)] = False
+    limit = triangle_limits(X, T, mesh.neighbors, getattr(mesh.domain, "regions", None),
+                            max_area) / (1.0 + AREA_MARGIN)
+    least = max(field_count(field, X, T) * (1.0 - PRUNE_WINDOW), len(T) * (1.0 - PRUNE_SHARE))
+    Y, U, old, taken = prune_nodes(X, T, segments, movable, limit, least, PRUNE_ROUNDS,
+                                   MEAN_HALVINGS, MEAN_STEPS, SWAP_GAIN, POOR_RATIO)
+    if not taken:
+        return mesh
+    stats = replace(mesh.optimization, repairs=mesh.optimization.repairs + taken,
+                    min_ratio=_smallest_ratio(Y, U))
+    N = _walled(U, neighbors_of(U), segments, len(Y))
+    return replace(mesh, points=Y, triangles=U, neighbors=N, radii=np.asarray(mesh.radii)[old],
+                   optimization=stats)
 
 
 def _fine_walls_first_row(X, T, segments, field):

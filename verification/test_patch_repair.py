@@ -10,7 +10,11 @@ its window and never past it, the minimum never lowered, the most crowded
 node the one removed (off the walls' first row when none there can go: a
 gear's corners).  The node swaps after both: the count and the minimum kept,
 the mean up by the gain each swap must bring, no triangle taken below 0.7
-where a sharp fold sets the minimum.
+where a sharp fold sets the minimum.  The removals that pay: the mean up by
+their gain each, the count two triangles per node down and never under its
+floor, the minimum kept; a node put into a lattice taken out, none when the
+floor leaves no room; Triangle's square_circle_hole.poly, whose 691 fixed
+free points leave §2's nodes bad places, loses some.
 
 Oracles: verification/oracles.py (exact orientation and conformity, the radius
 ratio from the classical formulas), numpy areas and valence counts."""
@@ -37,6 +41,7 @@ from bubblemesh._patch_repair import (
     _apex,
     _retriangulate,
     balance_count,
+    prune_nodes,
     repair_worst,
 )
 from bubblemesh.sizing import SizeField, field_count
@@ -529,8 +534,10 @@ def test_an_apex_makes_an_equilateral_triangle_left_of_its_edge(a, b):
 
 
 def _without_swaps(domain, max_area):
+    """bm.mesh without the node swaps and the removals after them."""
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(pipeline, "SWAP_ROUNDS", 0)
+        patch.setattr(pipeline, "PRUNE_ROUNDS", 0)
         return bm.mesh(domain, max_area=max_area)
 
 
@@ -618,24 +625,114 @@ def test_a_count_past_the_window_still_lets_the_repair_insert(monkeypatch):
 
 
 @pytest.mark.heavy
-def test_node_swaps_take_no_triangle_below_0_7_where_a_corner_sets_the_minimum(monkeypatch):
-    """Triangle's la.poly at area/1000: the mesh's minimum (0.12) is at a
-    4-degree fold, so "not below the minimum" bars nothing.  The swaps must
-    still leave no more triangles below POOR_RATIO than they found."""
+@pytest.mark.parametrize("step, k", [("_swapped", 1000), ("_pruned", 100)])
+def test_last_steps_take_no_triangle_below_0_7_where_a_corner_sets_the_minimum(
+        step, k, monkeypatch):
+    """Triangle's la.poly at area/k: the mesh's minimum (0.12) is at a
+    4-degree fold, so "not below the minimum" bars nothing.  The swaps and
+    the removals must still leave no more triangles below POOR_RATIO than
+    they found."""
     triangle = pytest.importorskip("triangle")
     domain = bm.Domain.from_poly(Path(triangle.__file__).parent / "data" / "la.poly")
-    seen, real = [], pipeline._swapped
+    seen, real = [], getattr(pipeline, step)
 
     def spy(mesh, max_area, field):
         seen.append((mesh, real(mesh, max_area, field)))
         return seen[-1][1]
 
-    monkeypatch.setattr(pipeline, "_swapped", spy)
+    monkeypatch.setattr(pipeline, step, spy)
     with pytest.warns(bm.QualityWarning):
-        bm.mesh(domain, max_area=domain.area / 1000)
+        bm.mesh(domain, max_area=domain.area / k)
     assert seen  # once per mesh the ranking finishes, and on the chosen one
     for before, after in seen:
         q0 = O.radius_ratio_reference(before.points, before.triangles)
         q1 = O.radius_ratio_reference(after.points, after.triangles)
         assert q0.min() < 0.2 and (q0 < pipeline.POOR_RATIO).sum() > 0
         assert (q1 < pipeline.POOR_RATIO).sum() <= (q0 < pipeline.POOR_RATIO).sum()
+
+
+def _prune(X, tri, segments, n_b, least, rounds=8, gain=pipeline.SWAP_GAIN):
+    movable = np.arange(len(X)) >= n_b
+    movable[np.unique(segments)] = False
+    return prune_nodes(X, tri, segments, movable, np.full(len(tri), np.inf), least, rounds,
+                       HALVINGS, STEPS, gain)
+
+
+def test_a_removal_that_pays_takes_a_node_out_of_a_lattice():
+    """A node at an equilateral lattice triangle's centroid lowers three
+    triangles to 0.464: its removal raises the mean, so it goes and the
+    lattice comes back (every ratio 1); no lattice node's removal pays after
+    it, so one removal and no more.  With the floor at the count nothing
+    goes."""
+    X, tri, segments, n_b, n = _lattice_with_centroid_node()
+    Y, t, old, ops = _prune(X, tri, segments, n_b, 0)
+    assert ops == 1 and n not in old and len(t) == len(tri) - 2 and len(Y) == len(X) - 1
+    np.testing.assert_allclose(O.radius_ratio_reference(Y, t), 1.0, atol=1e-9)
+    np.testing.assert_array_equal(Y, X[old])
+    Y, t, old, ops = _prune(X, tri, segments, n_b, len(tri) - 1)
+    assert ops == 0 and len(t) == len(tri)
+
+
+def _without_removals(domain, max_area):
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(pipeline, "PRUNE_ROUNDS", 0)
+        return bm.mesh(domain, max_area=max_area)
+
+
+def _check_pruned(domain, max_area, m):
+    """pipeline._pruned on ``m``: (the result, its removals), every property
+    of the removals checked against the reference ratio and exact checks."""
+    field = SizeField.from_domain(domain, size=pipeline._user_size(None, max_area))
+    p = pipeline._pruned(m, max_area, field)
+    removed = len(m.points) - len(p.points)
+    assert (removed == 0) == (p is m)
+    assert len(p.triangles) == len(m.triangles) - 2 * removed
+    if removed:
+        floor = max(field_count(field, m.points, m.triangles) * (1 - pipeline.PRUNE_WINDOW),
+                    len(m.triangles) * (1 - pipeline.PRUNE_SHARE))
+        assert len(p.triangles) >= floor
+    q0 = O.radius_ratio_reference(m.points, m.triangles)
+    q = O.radius_ratio_reference(p.points, p.triangles)
+    assert q.min() >= q0.min() - 1e-12
+    assert q.mean() >= q0.mean() + removed * pipeline.SWAP_GAIN - 1e-12
+    assert np.all(_areas(p.points, p.triangles) <= max_area * (1 + 1e-12))
+    O.check_valid(p.points, p.triangles, p.neighbors)
+    O.check_conforming(p.points, p.triangles, p.segments, area=domain.area, rel=1e-9)
+    np.testing.assert_array_equal(p.points[: m.n_boundary], m.points[: m.n_boundary])
+    nodes = {tuple(x) for x in p.points.tolist()}
+    assert all(tuple(x) in nodes for x in np.asarray(domain.points).tolist())  # fixed points kept
+    assert len(p.radii) == len(p.points) and np.all(p.radii > 0)
+    again = pipeline._pruned(m, max_area, field)
+    np.testing.assert_array_equal(again.points, p.points)
+    np.testing.assert_array_equal(again.triangles, p.triangles)
+    return p, removed
+
+
+@pytest.mark.heavy
+@given(corner_domains(max_holes=2), st.sampled_from([250, 500]))
+def test_removals_that_pay_raise_the_mean_and_keep_the_minimum_and_the_floor(loops, k):
+    """pipeline._pruned on bm.mesh's result without it: two triangles fewer
+    per removal, the count not under PRUNE_WINDOW below the field's nor
+    PRUNE_SHARE below its own, the
+    mean up by more than SWAP_GAIN per removal, the smallest ratio not
+    lower, every area within max_area, the mesh valid and conforming, its
+    boundary nodes and input points unmoved, and the same bits on a second
+    run."""
+    domain = bm.Domain.from_loops(loops)
+    _check_pruned(domain, domain.area / k, _without_removals(domain, domain.area / k))
+
+
+@pytest.mark.heavy
+def test_removals_that_pay_mend_nodes_set_between_fixed_points():
+    """Triangle's square_circle_hole.poly holds 691 free points, fixed like
+    the walls: at area/1000 §2 still puts nodes between them where the field
+    asks for one, and some of those lower the mean.  The removals take at
+    least one of them out and raise the mean by at least 1e-3."""
+    triangle = pytest.importorskip("triangle")
+    data = Path(triangle.__file__).parent / "data"
+    domain = bm.Domain.from_poly(data / "square_circle_hole.poly")
+    m = _without_removals(domain, domain.area / 1000)
+    p, removed = _check_pruned(domain, domain.area / 1000, m)
+    assert removed >= 1
+    assert (O.radius_ratio_reference(p.points, p.triangles).mean()
+            >= O.radius_ratio_reference(m.points, m.triangles).mean() + 1e-3)
