@@ -495,8 +495,16 @@ def _polygon_parts(geometry, what: str, strict: bool = True) -> list:
 
 def _rings(parts) -> list[np.ndarray]:
     """Every ring (exterior, then interiors) of the polygons as an open (n, 2) array."""
-    return [_open_ring(np.asarray(ring.coords, dtype=np.float64)[:, :2])
+    return [_open_ring(_unrepeated(np.asarray(ring.coords, dtype=np.float64)[:, :2]))
             for part in parts for ring in (part.exterior, *part.interiors)]
+
+
+def _unrepeated(ring: np.ndarray) -> np.ndarray:
+    """The ring without nodes that exactly repeat the one before: shapely
+    holds such rings valid, a user's drawing often has them."""
+    keep = np.ones(len(ring), dtype=bool)
+    keep[1:] = (ring[1:] != ring[:-1]).any(axis=1)
+    return ring[keep]
 
 
 def _merged(coords, segs, what: str) -> tuple[np.ndarray, np.ndarray]:

@@ -1019,6 +1019,20 @@ def test_from_shapely_keeps_ring_vertices_and_holes():
     assert domain.area == 15.0
 
 
+def test_from_shapely_drops_repeated_vertices_shapely_holds_valid():
+    """A ring that names a vertex twice in a row is valid to shapely (GEOS);
+    the domain has each vertex once and shapely's area."""
+    pytest.importorskip("shapely")
+    from shapely.geometry import Polygon
+
+    ring = [(0, 0), (2, 0), (2, 0), (2, 1), (1, 1), (1, 1), (1, 2), (0, 2), (0, 0)]
+    shape = Polygon(ring, [[(0.2, 0.2), (0.4, 0.2), (0.4, 0.2), (0.4, 0.4)]])
+    assert shape.is_valid
+    domain = Domain.from_shapely(shape)
+    assert len(domain.points) == len({*ring, (0.2, 0.2), (0.4, 0.2), (0.4, 0.4)})
+    assert domain.area == pytest.approx(shape.area, rel=1e-15)
+
+
 def test_from_shapely_spacing_splits_edges_and_keeps_corners():
     pytest.importorskip("shapely")
     from shapely.geometry import Polygon

@@ -685,6 +685,25 @@ def test_the_shape_sweep_builds_valid_domains_of_the_stated_areas():
     assert len(set(names)) == len(names) == 20
 
 
+def test_the_shapely_set_builds_valid_domains_of_geos_areas():
+    """Each drawing of the shapely set is one valid polygon (GEOS), and its
+    Domain has GEOS's area and a node at every ring vertex."""
+    pytest.importorskip("shapely")
+    from bubblemesh.studies.shapes import shapely_inputs
+
+    names = []
+    for name, polygon in shapely_inputs():
+        names.append(name)
+        assert polygon.geom_type == "Polygon" and polygon.is_valid, name
+        domain = bm.Domain.from_shapely(polygon)
+        assert domain.area == pytest.approx(polygon.area, rel=1e-12), name
+        rings = [polygon.exterior, *polygon.interiors]
+        vertices = np.unique(np.vstack([np.asarray(r.coords) for r in rings]), axis=0)
+        assert len(vertices) == len(domain.points), name
+        assert (np.unique(domain.points, axis=0) == vertices).all(), name
+    assert len(set(names)) == len(names) == 15
+
+
 def test_the_planar_graphs_match_triangles_reading_of_the_same_graphs():
     """Each graph of the planar-graphs set is the domain Triangle's -p makes
     of the same vertices, segments and holes: the same area and the same

@@ -6,6 +6,7 @@ Frontal-Delaunay and Triangle -pq30 at matched counts.
     python -m bubblemesh.studies.shapes --set rectangles --sizes 60 150 400 1200
     python -m bubblemesh.studies.shapes --set triangle-examples --sizes 100 300 1000 3000
     python -m bubblemesh.studies.shapes --set planar-graphs --sizes 30 100 1000
+    python -m bubblemesh.studies.shapes --set shapely --sizes 30 100 1000
 
 ``--set rectangles`` sweeps long rectangles (channels 4 to 30 times longer
 than wide) instead of the shapes; ``--set triangle-examples`` the ``.poly``
@@ -13,7 +14,8 @@ files that ship with the ``triangle`` package (Triangle's own examples:
 holes, interior constraints, free points, a lake with islands), read by
 :meth:`bubblemesh.Domain.from_poly`; ``--set planar-graphs`` planar graphs
 of several materials (:func:`planar_graphs`, by
-:meth:`bubblemesh.Domain.from_pslg`).
+:meth:`bubblemesh.Domain.from_pslg`); ``--set shapely`` shapes drawn with
+shapely (:func:`shapely_inputs`).
 
 Every shape is meshed with max_area = area / k for each k of ``--sizes``; the
 rows are :func:`bubblemesh.studies.quality.case_rows` (Gmsh on bm's refined
@@ -175,8 +177,66 @@ def triangle_examples():
         yield path.name, bm.Domain.from_poly(path)
 
 
+def shapely_inputs():
+    """(name, shapely Polygon): shapes drawn the way a CAD or GIS user draws
+    them, with shapely's buffers, unions and differences; arcs come out as
+    shapely's polygons (``quad_segs`` pieces a quarter circle)."""
+    from shapely import affinity, ops  # optional, as in Domain.from_shapely
+    from shapely import geometry as sg
+
+    rng = np.random.default_rng(7)
+    box = sg.box(-1.0, -1.0, 3.0, 1.0)
+    foil = sg.Polygon(geometry.naca_airfoil(0.12, 30, sharp=True))
+    elements = [affinity.rotate(affinity.scale(foil, f, f, origin=(0, 0)), a, origin=(0, 0))
+                for f, a in ((0.25, -20.0), (1.0, 0.0), (0.35, 25.0))]
+    elements = [affinity.translate(e, dx, dy)
+                for e, (dx, dy) in zip(elements, ((-0.3, 0.08), (0.0, 0.0), (1.03, -0.06)))]
+    yield "three-element airfoil", box.difference(ops.unary_union(elements))
+    x, y = rng.uniform(0.3, 3.7, 40), rng.uniform(0.3, 2.7, 40)
+    circles = [sg.Point(p).buffer(r, quad_segs=4)
+               for p, r in zip(zip(x, y), rng.uniform(0.04, 0.2, 40))]
+    yield "40 random circles in a box", sg.box(0, 0, 4, 3).difference(ops.unary_union(circles))
+    bore = sg.Point(0, 0).buffer(0.6, quad_segs=12).union(sg.box(-0.12, 0.4, 0.12, 0.75))
+    bolts = [sg.Point(1.4 * math.cos(a), 1.4 * math.sin(a)).buffer(0.15, quad_segs=4)
+             for a in np.linspace(0, 2 * math.pi, 6, endpoint=False) + 0.3]
+    yield "flange, bolt holes, keyway", sg.Point(0, 0).buffer(2.0, quad_segs=24).difference(
+        ops.unary_union([bore] + bolts))
+    yield "staircase", sg.Polygon([(0, 0), (5, 0)] + [
+        p for k in range(5) for p in ((5 - k, k + 1), (4 - k, k + 1))])
+    walk = np.cumsum(np.column_stack([np.ones(12), rng.uniform(-1, 1, 12)]), axis=0)
+    yield "river, buffered random walk", sg.LineString(walk).buffer(0.35, quad_segs=6)
+    ell = sg.box(0, 0, 6, 1).union(sg.box(0, 0, 1, 4))
+    yield "long edges, fillet of 0.05", ell.buffer(0.05, quad_segs=20).buffer(
+        -0.05, quad_segs=20)
+    plate = sg.box(0, 0, 3, 0.6).union(sg.box(0, 0, 0.6, 2)).buffer(0.15, quad_segs=6)
+    holes = [sg.Point(x, y).buffer(0.12, quad_segs=6) for x, y in ((2.4, 0.3), (0.3, 1.5))]
+    yield "bracket", plate.difference(ops.unary_union(holes))
+    t = np.linspace(0.5, 5.5 * math.pi, 200)
+    yield "spiral channel", sg.LineString(np.column_stack(
+        [0.12 * t * np.cos(t), 0.12 * t * np.sin(t)])).buffer(0.1, quad_segs=4)
+    yield "hex nut", sg.Polygon(_regular(6)).difference(sg.Point(0, 0).buffer(0.5, quad_segs=8))
+    yield "thin cross", sg.box(-1, -0.05, 1, 0.05).union(sg.box(-0.05, -1, 0.05, 1))
+    small = [sg.Point(0.2 * i + 0.1, 0.2 * j + 0.1).buffer(0.04, quad_segs=2)
+             for i in range(10) for j in range(10)]
+    yield "100 small holes", sg.box(0, 0, 2, 2).difference(ops.unary_union(small))
+    yield "1000-vertex circle", sg.Point(0, 0).buffer(1.0, quad_segs=250)
+    pair = [sg.Point(x, 0.5).buffer(0.2, quad_segs=8) for x in (0.795, 1.205)]
+    yield "two holes 0.01 apart", sg.box(0, 0, 2, 1).difference(ops.unary_union(pair))
+    yield "annulus sector, 10 degrees", sg.Polygon(
+        [(r * math.cos(a), r * math.sin(a)) for r, s in ((1.0, 1), (2.0, -1))
+         for a in np.radians(np.linspace(0, 10, 6))[::s]])
+    yield "gear, 40 teeth", sg.Polygon(geometry.gear(40, 1.0, 1.1, 10.0))
+
+
+def shapely_shapes():
+    """(name, domain) for each of :func:`shapely_inputs`, its ring vertices
+    the boundary nodes (:meth:`bubblemesh.Domain.from_shapely`)."""
+    for name, polygon in shapely_inputs():
+        yield name, bm.Domain.from_shapely(polygon)
+
+
 SETS = {"shapes": shapes, "rectangles": rectangles, "triangle-examples": triangle_examples,
-        "planar-graphs": planar_graphs}
+        "planar-graphs": planar_graphs, "shapely": shapely_shapes}
 
 
 def sweep(sizes=SIZES, out_dir=None, names=None, which="shapes"):
@@ -204,7 +264,7 @@ def main():
     parser.add_argument("--only", nargs="+", default=None, help="only these shapes")
     parser.add_argument("--set", choices=sorted(SETS), default="shapes", dest="which",
                         help="the shapes a user would bring, long rectangles, "
-                        "Triangle's example files or planar graphs")
+                        "Triangle's example files, planar graphs or shapely drawings")
     parser.add_argument("--out", type=Path, default=None,
                         help="write shapes_vs_gmsh.csv (rectangles_vs_gmsh.csv) here")
     args = parser.parse_args()
