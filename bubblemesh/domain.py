@@ -432,9 +432,10 @@ class Domain:
         are kept, so corners stay sharp.  ``constraints``
         (LineStrings, LinearRings or a MultiLineString) become interior
         constraints, ``points`` (Points, a MultiPoint or an (m, 2) array) free
-        nodes; with either, or several polygon parts, the domain is a planar
-        graph (:meth:`from_pslg`; ring k has marker k + 1, constraint j
-        marker n_rings + j + 1).
+        nodes; with either, several polygon parts, or rings that touch at a
+        point (a hole on the outer ring or on another hole, valid to GEOS),
+        the domain is a planar graph (:meth:`from_pslg`; ring k has marker
+        k + 1, constraint j marker n_rings + j + 1).
         """
         try:
             import shapely  # noqa: F401
@@ -453,7 +454,8 @@ class Domain:
             loops = [_split_edges(ring, spacing) for ring in loops]
             lines = [_split_polyline(line, spacing) for line in lines]
         free = _point_array(points)
-        if len(parts) == 1 and not lines and not len(free) and not names:
+        if len(parts) == 1 and not lines and not len(free) and not names \
+                and not _rings_touch(parts[0]):
             domain = cls.from_loops(loops)  # as before: a polygon with holes
         else:
             domain = cls.from_pslg(loops=loops, constraints=lines, points=free, names=names)
@@ -497,6 +499,19 @@ def _rings(parts) -> list[np.ndarray]:
     """Every ring (exterior, then interiors) of the polygons as an open (n, 2) array."""
     return [_open_ring(_unrepeated(np.asarray(ring.coords, dtype=np.float64)[:, :2]))
             for part in parts for ring in (part.exterior, *part.interiors)]
+
+
+def _rings_touch(polygon) -> bool:
+    """Does a ring of a valid shapely polygon touch another (GEOS allows a
+    hole to meet the outer ring or another hole at a point)?  An invalid
+    polygon answers False: :meth:`Domain.from_loops` then names its fault."""
+    from shapely import STRtree
+
+    rings = [polygon.exterior, *polygon.interiors]
+    if len(rings) < 2 or not polygon.is_valid:
+        return False
+    first, second = STRtree(rings).query(rings, predicate="intersects")
+    return bool((first != second).any())
 
 
 def _unrepeated(ring: np.ndarray) -> np.ndarray:

@@ -20,6 +20,7 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 from strategies import budget, domains
 
+from bubblemesh import mesh as mesh_domain
 from bubblemesh._sweep import find_crossing
 from bubblemesh.domain import Domain
 from bubblemesh.errors import GeometryError
@@ -1031,6 +1032,30 @@ def test_from_shapely_drops_repeated_vertices_shapely_holds_valid():
     domain = Domain.from_shapely(shape)
     assert len(domain.points) == len({*ring, (0.2, 0.2), (0.4, 0.2), (0.4, 0.4)})
     assert domain.area == pytest.approx(shape.area, rel=1e-15)
+
+
+@pytest.mark.parametrize("holes", [
+    [[(2, 0), (3, 1), (1, 1)]],  # a hole's corner on the outer ring's edge
+    [[(1, 1), (2, 1), (2, 2), (1, 2)], [(2, 2), (3, 2), (3, 3), (2, 3)]],  # two share a corner
+])
+def test_from_shapely_takes_holes_that_touch_a_ring_at_a_point(holes):
+    """GEOS holds a hole that meets the outer ring or another hole at one
+    point valid; the mesh covers exactly the polygon: GEOS's area, every
+    triangle inside it (GEOS), the touching point a node."""
+    pytest.importorskip("shapely")
+    from shapely.geometry import Point, Polygon
+
+    shape = Polygon([(0, 0), (4, 0), (4, 4), (0, 4)], holes)
+    assert shape.is_valid
+    mesh = mesh_domain(Domain.from_shapely(shape), max_area=0.1)
+    P, T = mesh.points, mesh.triangles
+    u, v = P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]]
+    cross = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    assert (cross > 0).all()
+    assert 0.5 * cross.sum() == pytest.approx(shape.area, rel=1e-12)
+    assert all(shape.contains(Point(c)) for c in P[T].mean(axis=1))
+    touch = (2, 0) if len(holes) == 1 else (2, 2)
+    assert (P == touch).all(axis=1).any()
 
 
 def test_from_shapely_spacing_splits_edges_and_keeps_corners():
