@@ -65,9 +65,9 @@ def mesh(domain: Domain, *, size: Any = None, max_area: Any = None, gradation: f
     ``rings``, ``smoothing_rounds``, ``smoothing_sweeps``).  Input nodes keep their
     coordinates bit for bit and come first, loop after loop (the outer loop
     counter-clockwise), with the nodes added on their segments between them.
-    Corners too sharp for a radius ratio of 0.7 give a
-    :class:`~bubblemesh.pipeline.QualityWarning`, also listed in
-    ``mesh.generation.warnings``.
+    Corners too sharp for a radius ratio of 0.7, and triangles below it that
+    touch no such corner, give a :class:`~bubblemesh.pipeline.QualityWarning`,
+    also listed in ``mesh.generation.warnings``.
 
     ``paper=True``: the paper as published, ``optimize(generate(domain))``
     with ``options`` passed to :func:`optimize` (``size``, ``max_area`` and

@@ -87,7 +87,9 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    its three meshes and it judged against the asked field's count.
 5. Corners sharper than :data:`SHARP_ANGLE` (where no triangle can reach a
    radius ratio of 0.7) are reported: a :class:`QualityWarning` and the
-   ``warnings`` field of the returned mesh's generation record.
+   ``warnings`` field of the returned mesh's generation record; so are the
+   finished mesh's triangles below 0.7 that touch no such corner
+   (:func:`_reported`).
 """
 
 from __future__ import annotations
@@ -138,7 +140,8 @@ from .topology import neighbors_of
 from .triangulation import constrained_delaunay
 
 __all__ = ["QualityWarning", "RobustGenerationStats", "RobustOptimizationStats", "robust_mesh",
-           "size_field", "corner_angles", "best_corner_ratio", "SHARP_ANGLE"]
+           "size_field", "corner_angles", "best_corner_ratio", "sharp_corner_flags",
+           "SHARP_ANGLE"]
 
 
 GRADE_ANGLE = math.radians(40.0)  # walls of sharper corners are split in geometric progression
@@ -350,7 +353,40 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
         s_field, s_channel, s_fine = _sized(domain, size, max_area, steeper)
         other = _chosen(domain, s_field, s_channel, s_fine, rescaled=None, counted=field, **run)
         mesh = _judged(other, mesh, field_count(field, mesh.points, mesh.triangles), finish)[0]
-    return finish(mesh)
+    return _reported(domain, finish(mesh))
+
+
+def sharp_corner_flags(domain, points):
+    """True at the ``points`` that are input corners sharper than
+    SHARP_ANGLE (input nodes keep their coordinates bit for bit): a triangle
+    there cannot reach a radius ratio of 0.7."""
+    corners = np.asarray(domain.points)[corner_angles(domain) < SHARP_ANGLE]
+    points = np.asarray(points)
+    return np.isin(points[:, 0] + 1j * points[:, 1], corners[:, 0] + 1j * corners[:, 1])
+
+
+def _reported(domain, mesh):
+    """The mesh, with a QualityWarning (also in its generation record's
+    ``warnings``) where triangles that touch no input corner sharper than
+    SHARP_ANGLE have a radius ratio below POOR_RATIO: no corner rules those
+    out, so the mesh does not pass them over in silence.  The usual cause is
+    a gap the size field does not resolve (walls closer than FEATURE_FLOOR
+    of their segments' length) or a steep change of spacing."""
+    q = radius_ratio(mesh.points, mesh.triangles)
+    at_sharp = sharp_corner_flags(domain, mesh.points)[mesh.triangles].any(axis=1)
+    poor = np.flatnonzero((q < POOR_RATIO) & ~at_sharp)
+    if not len(poor):
+        return mesh
+    worst = poor[np.argmin(q[poor])]
+    x, y = mesh.points[mesh.triangles[worst]].mean(axis=0)
+    note = (f"{len(poor)} triangles that touch no input corner sharper than "
+            f"{math.degrees(SHARP_ANGLE):.3g} degrees have a radius ratio below {POOR_RATIO} "
+            f"(the worst, {q[worst]:.3g}, at ({x:.6g}, {y:.6g})): the boundary there has a gap "
+            f"or a change of spacing the size field does not resolve; give a smaller size "
+            f"there, or split the segments nearby")
+    warnings.warn(note, QualityWarning, stacklevel=4)
+    record = replace(mesh.generation, warnings=(*mesh.generation.warnings, note))
+    return replace(mesh, generation=record)
 
 
 def _finisher(max_area, field):

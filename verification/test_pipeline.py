@@ -133,6 +133,30 @@ def test_sharp_corner_is_reported_and_a_square_is_not():
     assert m.generation.warnings == ()
 
 
+def test_poor_triangles_no_corner_explains_are_reported():
+    """Two holes 0.001 apart, under 1% of their 0.6 sides, a gap the size
+    field leaves unresolved; every corner is 90 or 270 degrees.  The warning
+    counts the triangles below 0.7 as the reference formula does and places
+    the worst in the gap; a plain rectangle with holes gets none."""
+    outer = [(0, 0), (2, 0), (2, 1), (0, 1)]
+    left = [(0.2, 0.2), (0.2, 0.8), (1.0, 0.8), (1.0, 0.2)]
+    right = [(1.001, 0.2), (1.001, 0.8), (1.8, 0.8), (1.8, 0.2)]
+    with pytest.warns(bm.QualityWarning, match="touch no input corner") as caught:
+        m = bm.mesh(bm.Domain.from_loops([outer, left, right]), size=0.1)
+    q = O.radius_ratio_reference(m.points, m.triangles)
+    poor = int((q < 0.7).sum())
+    notes = [n for n in m.generation.warnings if "touch no input corner" in n]
+    assert poor > 0 and len(notes) == 1 and len(caught) == 1
+    assert notes[0].startswith(f"{poor} triangles ")
+    x = float(notes[0].split("at (")[1].split(",")[0])
+    assert 1.0 <= x <= 1.001
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", bm.QualityWarning)
+        right[0], right[1] = (1.2, 0.2), (1.2, 0.8)
+        m = bm.mesh(bm.Domain.from_loops([outer, left, right]), size=0.1)
+    assert m.generation.warnings == ()
+
+
 def test_best_corner_ratio_matches_the_isosceles_triangle():
     theta = np.radians([10.0, 27.0, 60.0, 90.0])
     apex = np.column_stack([np.zeros(4), np.zeros(4)])

@@ -32,6 +32,7 @@ import numpy as np
 
 import bubblemesh as bm
 from bubblemesh.domain import _loop_areas
+from bubblemesh.pipeline import sharp_corner_flags
 from bubblemesh.quality import radius_ratio
 from bubblemesh.studies import geometry
 
@@ -142,16 +143,6 @@ def _stats(points, triangles):
     return len(triangles), float(q.min()), float(q.mean()), int(np.sum(q < 0.7))
 
 
-def _sharp_corner_flags(domain, points):
-    """True at the mesh points that are input corners sharper than
-    SHARP_ANGLE (every mesher here keeps input nodes bit for bit): an element
-    there cannot reach a radius ratio of 0.7."""
-    from bubblemesh.pipeline import SHARP_ANGLE, corner_angles
-
-    corners = np.asarray(domain.points)[corner_angles(domain) < SHARP_ANGLE]
-    return np.isin(points[:, 0] + 1j * points[:, 1], corners[:, 0] + 1j * corners[:, 1])
-
-
 def measure(domain, points, triangles):
     """One mesh of ``domain``: element count N, min and mean radius ratio,
     count below 0.7, that count without the elements touching an input corner
@@ -164,7 +155,7 @@ def measure(domain, points, triangles):
     t = np.asarray(triangles, dtype=np.int64)
     q = radius_ratio(p, t)
     poor = q < 0.7
-    at_sharp = _sharp_corner_flags(domain, p)[t].any(axis=1)
+    at_sharp = sharp_corner_flags(domain, p)[t].any(axis=1)
     holes = domain.hole_points if len(domain.hole_points) else None
     seg, interior = np.asarray(domain.segments), np.asarray(domain.interior, bool)
     once = ~interior | (seg[:, 0] < seg[:, 1])  # a constraint is listed both ways
