@@ -119,6 +119,7 @@ def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings
     count = MEAN_CANDIDATES if by_mean else CANDIDATES
     lowest = float(triangle_quality(np.asarray(X, np.float64), np.asarray(T, np.int64)).mean()
                    if len(T) else 1.0) - INNER_DROP
+    size = _remembered(size)
 
     def pick(X, T, q, ptr, idx, free, limit, walls):
         m = len(T)
@@ -154,6 +155,29 @@ def balance_count(X, T, segments, movable, limit, counts, size, rounds, halvings
                         low, None, by_mean)
 
     return _rounds(X, T, segments, movable, limit, rounds, pick)
+
+
+def _remembered(size):
+    """``size`` evaluated only at the points the last call did not have: a
+    round changes a few triangles, and a point's size depends on it alone,
+    so the values are the same bits (a graded field's search costs most)."""
+    keys, values = np.zeros(0, np.complex128), np.zeros(0)
+
+    def call(xy):
+        nonlocal keys, values
+        xy = np.asarray(xy, np.float64)
+        now = xy[:, 0] + 1j * xy[:, 1]
+        at = np.minimum(np.searchsorted(keys, now), max(len(keys) - 1, 0))
+        known = keys[at] == now if len(keys) else np.zeros(len(now), np.bool_)
+        out = np.empty(len(now))
+        out[known] = values[at[known]]
+        if not known.all():
+            out[~known] = np.asarray(size(xy[~known]), np.float64)
+        order = np.argsort(now, kind="stable")
+        keys, values = now[order], out[order]
+        return out
+
+    return call
 
 
 def _padded(mask, n):

@@ -736,3 +736,28 @@ def test_removals_that_pay_mend_nodes_set_between_fixed_points():
     assert removed >= 1
     assert (O.radius_ratio_reference(p.points, p.triangles).mean()
             >= O.radius_ratio_reference(m.points, m.triangles).mean() + 1e-3)
+
+
+@given(st.lists(st.lists(st.tuples(st.integers(-3, 3), st.integers(-3, 3)), max_size=12),
+                min_size=1, max_size=6))
+def test_the_balance_evaluates_the_size_only_at_points_it_has_not_seen(calls):
+    """The balance's remembered size gives, call after call, the values the
+    size itself gives (the same bits), and asks it only for the points the
+    call before did not have."""
+    from bubblemesh._patch_repair import _remembered
+
+    def size(xy):
+        asked.append(np.array(xy))
+        return 1.0 + np.sin(xy[:, 0]) * np.cos(3.0 * xy[:, 1])
+
+    asked, before = [], np.zeros((0, 2))
+    remembered = _remembered(size)
+    for points in calls:
+        xy = np.array(points, np.float64).reshape(-1, 2) / 7.0
+        asked.clear()
+        got = remembered(xy)
+        np.testing.assert_array_equal(got, 1.0 + np.sin(xy[:, 0]) * np.cos(3.0 * xy[:, 1]))
+        new = [p for p in xy.tolist() if p not in before.tolist()]
+        seen = np.vstack(asked).tolist() if asked else []
+        assert sorted(seen) == sorted(new)
+        before = xy
