@@ -1047,7 +1047,7 @@ def test_from_shapely_takes_holes_that_touch_a_ring_at_a_point(holes):
 
     shape = Polygon([(0, 0), (4, 0), (4, 4), (0, 4)], holes)
     assert shape.is_valid
-    mesh = mesh_domain(Domain.from_shapely(shape), max_area=0.1)
+    mesh = mesh_domain(Domain.from_shapely(shape), max_area=0.5)
     P, T = mesh.points, mesh.triangles
     u, v = P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]]
     cross = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]

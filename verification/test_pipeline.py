@@ -133,6 +133,7 @@ def test_sharp_corner_is_reported_and_a_square_is_not():
     assert m.generation.warnings == ()
 
 
+@pytest.mark.heavy  # two meshes of 600 elements: a minute as plain Python
 def test_poor_triangles_no_corner_explains_are_reported():
     """Two holes 0.001 apart, under 1% of their 0.6 sides, a gap the size
     field leaves unresolved; every corner is 90 or 270 degrees.  The warning
