@@ -191,6 +191,22 @@ def _cone_min(q, grid, full, px, py, ph, start, end, left, box, least, g, cap):
     return out
 
 
+@njit(cache=True, parallel=True)
+def _cone_below(q, bound, px, py, ph, start, end, left, box, least, g):
+    """:func:`cone_at` at each source point q[j] with ``bound[j]`` (its own
+    value) for the cap: min(bound[j], the field there), found with the
+    search pruned from the start (a source is dominated exactly when the
+    result is below its value)."""
+    n = q.shape[0]
+    out = np.empty(n)
+    for block in prange((n + _BLOCK - 1) // _BLOCK):
+        stack = np.empty(_STACK, np.int64)
+        for j in range(block * _BLOCK, min(n, (block + 1) * _BLOCK)):
+            out[j] = cone_at(q[j, 0], q[j, 1], stack, px, py, ph, start, end, left, box,
+                             least, g, bound[j])
+    return out
+
+
 @njit(cache=True)
 def _cell_reaches_below(x0, y0, x1, y1, stack, px, py, ph, start, end, left, box, least, g,
                         cap):
@@ -448,7 +464,9 @@ class SizeField:
             raise ValueError("source points must be finite and source values finite and > 0")
         self.sample_points, self.sample_values = points, values
         self._set_sources(points, values)
-        graded = self(points)
+        t = self._tree
+        graded = _cone_below(points, values, t.x, t.y, t.value, t.start, t.end, t.left, t.box,
+                             t.least, float(self.gradation))
         keep = (graded >= values) & (values < self.cap)  # the others change no value
         if not keep.any():
             keep = values == values.min()

@@ -57,6 +57,22 @@ def test_field_is_the_brute_force_cone_minimum(case):
 
 
 @given(source_sets())
+def test_only_dominated_sources_are_dropped(case):
+    """A source is dropped only where another's cone is at or below its
+    value there, and kept only where none is clearly below (brute force)."""
+    pts, vals, g, _ = case
+    field = SizeField(pts, vals, gradation=g)
+    kept = {tuple(p) for p in field.points.tolist()}
+    d = np.linalg.norm(pts[:, None, :] - pts[None, :, :], axis=2)
+    others = np.where(np.eye(len(pts), dtype=bool), np.inf, vals[None, :] + g * d).min(axis=1)
+    for k, p in enumerate(pts.tolist()):
+        if tuple(p) in kept:
+            assert others[k] >= vals[k] * (1 - REL)
+        else:
+            assert others[k] <= vals[k] * (1 + REL)
+
+
+@given(source_sets())
 def test_graded_inputs_are_reproduced_at_the_sources(case):
     pts, vals, g, _ = case
     graded = brute_field(pts, vals, g, pts)  # inputs that satisfy the gradation
