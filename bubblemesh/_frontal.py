@@ -293,7 +293,7 @@ def _initial_keys(P, tri, nbr, ntri, r_e, density, factor, field, depth, limits)
     """:func:`frontal_key` of each initial triangle, in blocks of KEY_BLOCK
     with a field stack of ``depth`` each."""
     for block in prange((ntri + KEY_BLOCK - 1) // KEY_BLOCK):
-        stack = np.empty(depth, np.int64)
+        stack = np.full(depth, -1, np.int64)
         for t in range(block * KEY_BLOCK, min(ntri, (block + 1) * KEY_BLOCK)):
             density[t] = frontal_key(P, tri, nbr, t, r_e, factor, field, stack, limits)
 

@@ -151,7 +151,7 @@ def _kernel_field(size_field):
     the kernel; a small dummy field when there is none (the paper's §2)."""
     from .sizing import _EQUILATERAL_RADIUS, STACK_SIZE, SizeField
 
-    stack = np.empty(STACK_SIZE, np.int64)
+    stack = np.full(STACK_SIZE, -1, np.int64)
     if size_field is None:
         dummy = SizeField(np.zeros((1, 2)), np.ones(1), gradation=0.0)
         return False, dummy.kernel_args(), 0.0, stack, math.inf

@@ -53,8 +53,10 @@ QUADTREE_SAMPLING = 0.7  # quadtree cells have sides <= QUADTREE_SAMPLING * user
 MAX_SOURCES = 2**24  # beyond this the requested sizes are unreasonably small
 _LEAF = 8  # items per tree leaf
 _STACK = 256  # > twice the depth of any tree over < 2**60 items
-STACK_SIZE = _STACK
+_HINT = _STACK  # the stack's last entry: the source of the previous answer, a warm start
+STACK_SIZE = _STACK + 1
 _BLOCK = 256  # queries per parallel task (one traversal stack each)
+SORTED_QUERIES = 4096  # from this many queries on, uncapped fields answer in Morton order
 # the cap grid: cells of GRID_CELLS caps (at most GRID_MAX a side), grown by GRID_MARGIN
 # of a side and tested against (1 + CAP_MARGIN) cap, far above any rounding
 GRID_CELLS, GRID_MAX, GRID_MARGIN, CAP_MARGIN = 8.0, 256, 1e-6, 1e-9
@@ -69,12 +71,22 @@ def _morton_order(centres: np.ndarray) -> np.ndarray:
     lo = centres.min(axis=0)
     extent = float((centres.max(axis=0) - lo).max())
     scale = (2**21 - 1) / extent if extent > 0 else 0.0
-    q = ((centres - lo) * scale).astype(np.uint64)
-    code = np.zeros(len(centres), dtype=np.uint64)
-    for bit in range(21):
-        for axis in range(2):
-            code |= ((q[:, axis] >> np.uint64(bit)) & np.uint64(1)) << np.uint64(2 * bit + axis)
-    return np.argsort(code, kind="stable")
+    return np.argsort(_morton_codes(np.ascontiguousarray(centres), lo, scale), kind="stable")
+
+
+@njit(cache=True)
+def _morton_codes(centres, lo, scale):
+    """Interleaved bits of the points' 21-bit grid coordinates."""
+    code = np.zeros(centres.shape[0], np.uint64)
+    for j in range(centres.shape[0]):
+        qx = np.uint64((centres[j, 0] - lo[0]) * scale)
+        qy = np.uint64((centres[j, 1] - lo[1]) * scale)
+        c = np.uint64(0)
+        for bit in range(21):
+            c |= ((qx >> np.uint64(bit)) & np.uint64(1)) << np.uint64(2 * bit)
+            c |= ((qy >> np.uint64(bit)) & np.uint64(1)) << np.uint64(2 * bit + 1)
+        code[j] = c
+    return code
 
 
 @njit(cache=True)
@@ -138,13 +150,23 @@ class _Tree:
 # --- cone field: h(x) = min(cap, min_k h_k + g |x - x_k|) ------------------------------
 
 
+@njit(cache=True, inline="always")
+def _cone(k, x, y, px, py, ph, g):
+    return ph[k] + g * math.sqrt((px[k] - x) ** 2 + (py[k] - y) ** 2)
+
+
 @njit(cache=True)
 def cone_at(x, y, stack, px, py, ph, start, end, left, box, least, g, cap):
     """min(cap, min_k ph[k] + g |(x, y) - p_k|), exactly the minimum over all
     sources (a node is skipped only when its lower bound, its least h plus g
     times the distance to its box, cannot beat the best so far).  ``stack``:
-    int64 scratch of length _STACK."""
+    int64 scratch of length STACK_SIZE whose last entry, if a source index,
+    starts the search at that source's cone (nearby queries share their best
+    source; any source gives the same minimum) and is set to the answer's."""
     best = cap
+    found = stack[_HINT]
+    if found >= 0 and found < ph.shape[0]:
+        best = min(best, _cone(found, x, y, px, py, ph, g))
     top = 1
     stack[0] = 0
     while top > 0:
@@ -154,14 +176,16 @@ def cone_at(x, y, stack, px, py, ph, start, end, left, box, least, g, cap):
             continue
         if left[i] < 0:
             for k in range(start[i], end[i]):
-                v = ph[k] + g * math.sqrt((px[k] - x) ** 2 + (py[k] - y) ** 2)
-                best = min(best, v)
+                v = _cone(k, x, y, px, py, ph, g)
+                if v < best:
+                    best, found = v, k
             continue
         a, b = left[i], left[i] + 1
         if _box_distance(box, a, x, y) + least[a] < _box_distance(box, b, x, y) + least[b]:
             a, b = b, a  # the more promising child on top
         stack[top], stack[top + 1] = a, b
         top += 2
+    stack[_HINT] = found
     return best
 
 
@@ -184,7 +208,7 @@ def _cone_min(q, grid, full, px, py, ph, start, end, left, box, least, g, cap):
     n = q.shape[0]
     out = np.empty(n)
     for block in prange((n + _BLOCK - 1) // _BLOCK):
-        stack = np.empty(_STACK, np.int64)
+        stack = np.full(STACK_SIZE, -1, np.int64)
         for j in range(block * _BLOCK, min(n, (block + 1) * _BLOCK)):
             out[j] = field_at(q[j, 0], q[j, 1], stack, grid, full, px, py, ph, start, end,
                               left, box, least, g, cap)
@@ -200,7 +224,7 @@ def _cone_below(q, bound, px, py, ph, start, end, left, box, least, g):
     n = q.shape[0]
     out = np.empty(n)
     for block in prange((n + _BLOCK - 1) // _BLOCK):
-        stack = np.empty(_STACK, np.int64)
+        stack = np.full(STACK_SIZE, -1, np.int64)
         for j in range(block * _BLOCK, min(n, (block + 1) * _BLOCK)):
             out[j] = cone_at(q[j, 0], q[j, 1], stack, px, py, ph, start, end, left, box,
                              least, g, bound[j])
@@ -465,8 +489,9 @@ class SizeField:
         self.sample_points, self.sample_values = points, values
         self._set_sources(points, values)
         t = self._tree
-        graded = _cone_below(points, values, t.x, t.y, t.value, t.start, t.end, t.left, t.box,
-                             t.least, float(self.gradation))
+        graded = np.empty(len(values))  # in the tree's (Morton) order: warm starts
+        graded[t.order] = _cone_below(t.lo, t.value, t.x, t.y, t.value, t.start, t.end, t.left,
+                                      t.box, t.least, float(self.gradation))
         keep = (graded >= values) & (values < self.cap)  # the others change no value
         if not keep.any():
             keep = values == values.min()
@@ -481,7 +506,12 @@ class SizeField:
     def __call__(self, xy) -> np.ndarray:
         """h at each row of ``xy`` ((n, 2) -> (n,) float64)."""
         xy = np.ascontiguousarray(np.asarray(xy, dtype=np.float64).reshape(-1, 2))
-        return _cone_min(xy, *self.kernel_args())
+        if len(xy) < SORTED_QUERIES or math.isfinite(self.cap):  # the cap grid answers most
+            return _cone_min(xy, *self.kernel_args())
+        order = _morton_order(xy)  # neighbours in turn: each answer warm-starts the next
+        out = np.empty(len(xy))
+        out[order] = _cone_min(np.ascontiguousarray(xy[order]), *self.kernel_args())
+        return out
 
     def kernel_args(self) -> tuple:
         """The arrays and numbers :func:`field_at` takes after its stack, for

@@ -72,6 +72,31 @@ def test_only_dominated_sources_are_dropped(case):
             assert others[k] <= vals[k] * (1 + REL)
 
 
+@budget(25)
+@given(source_sets(), st.integers(0, 2**32 - 1))
+def test_warm_starts_change_no_bit(case, seed):
+    """Each search starts from the previous answer's source, and a large
+    query is answered in Morton order: whatever the start, the value must be
+    the cold search's, bit for bit, and the brute-force minimum."""
+    from bubblemesh.sizing import _HINT, SORTED_QUERIES, STACK_SIZE, cone_at
+
+    pts, vals, g, rng = case
+    field = SizeField(pts, vals, gradation=g)
+    lo, hi = pts.min(axis=0) - 1, pts.max(axis=0) + 1
+    xy = rng.uniform(lo, hi, (SORTED_QUERIES + 7, 2))
+    got = field(xy)
+    np.testing.assert_allclose(got, brute_field(pts, vals, g, xy), rtol=REL, atol=0)
+    np.testing.assert_array_equal(field(xy[::-1]), got[::-1])
+    tree = field.kernel_args()[2:]
+    starts = np.random.default_rng(seed).integers(-2, len(field.values) + 2, 60)
+    for j, start in enumerate(starts):
+        stack = np.full(STACK_SIZE, -1, np.int64)
+        cold = cone_at(*xy[j], stack, *tree)
+        stack[_HINT] = start
+        assert cone_at(*xy[j], stack, *tree) == cold == got[j]
+        assert 0 <= stack[_HINT] < len(field.values)
+
+
 @given(source_sets())
 def test_graded_inputs_are_reproduced_at_the_sources(case):
     pts, vals, g, _ = case
