@@ -71,22 +71,17 @@ def _morton_order(centres: np.ndarray) -> np.ndarray:
     lo = centres.min(axis=0)
     extent = float((centres.max(axis=0) - lo).max())
     scale = (2**21 - 1) / extent if extent > 0 else 0.0
-    return np.argsort(_morton_codes(np.ascontiguousarray(centres), lo, scale), kind="stable")
+    q = ((centres - lo) * scale).astype(np.uint64)
+    return np.argsort(_spread(q[:, 0]) | (_spread(q[:, 1]) << np.uint64(1)), kind="stable")
 
 
-@njit(cache=True)
-def _morton_codes(centres, lo, scale):
-    """Interleaved bits of the points' 21-bit grid coordinates."""
-    code = np.zeros(centres.shape[0], np.uint64)
-    for j in range(centres.shape[0]):
-        qx = np.uint64((centres[j, 0] - lo[0]) * scale)
-        qy = np.uint64((centres[j, 1] - lo[1]) * scale)
-        c = np.uint64(0)
-        for bit in range(21):
-            c |= ((qx >> np.uint64(bit)) & np.uint64(1)) << np.uint64(2 * bit)
-            c |= ((qy >> np.uint64(bit)) & np.uint64(1)) << np.uint64(2 * bit + 1)
-        code[j] = c
-    return code
+def _spread(v: np.ndarray) -> np.ndarray:
+    """The bits of each value (below 2**32) moved to the even places."""
+    for shift, mask in ((16, 0x0000FFFF0000FFFF), (8, 0x00FF00FF00FF00FF),
+                        (4, 0x0F0F0F0F0F0F0F0F), (2, 0x3333333333333333),
+                        (1, 0x5555555555555555)):
+        v = (v | (v << np.uint64(shift))) & np.uint64(mask)
+    return v
 
 
 @njit(cache=True)

@@ -295,3 +295,19 @@ def test_a_constant_size_fills_the_cap_grid():
                                grid[1] + (np.arange(len(full)) // int(grid[3]) + 0.5) * side])
     deep = np.hypot(*centres.T) < 1 - 2 * side
     assert full[deep].all() and deep.sum() > 0.5 * len(full)
+
+
+@given(source_sets())
+def test_morton_order_interleaves_the_grid_bits(case):
+    """The tree's order sorts points by their 21-bit grid coordinates with
+    the bits interleaved (y's above x's), here by strings of binary digits."""
+    from bubblemesh.sizing import _morton_order
+
+    pts, _, _, _ = case
+    lo = pts.min(axis=0)
+    extent = float((pts.max(axis=0) - lo).max())
+    scale = (2**21 - 1) / extent if extent > 0 else 0.0
+    cells = ((pts - lo) * scale).astype(np.int64)
+    keys = ["".join(y + x for y, x in zip(f"{cy:021b}", f"{cx:021b}")) for cx, cy in cells]
+    want = sorted(range(len(pts)), key=lambda k: (keys[k], k))
+    assert _morton_order(pts).tolist() == want
