@@ -704,6 +704,28 @@ def test_the_shapely_set_builds_valid_domains_of_geos_areas():
     assert len(set(names)) == len(names) == 15
 
 
+def test_the_glyph_set_builds_valid_domains_of_geos_areas():
+    """Each letter outline is one valid polygon (GEOS) with the counters of
+    the letter as holes, and its Domain has GEOS's area and a node at every
+    ring vertex."""
+    pytest.importorskip("shapely")
+    pytest.importorskip("matplotlib")
+    from bubblemesh.studies.shapes import glyph_inputs
+
+    holes = {}
+    for name, polygon in glyph_inputs():
+        assert polygon.geom_type == "Polygon" and polygon.is_valid, name
+        domain = bm.Domain.from_shapely(polygon)
+        assert domain.area == pytest.approx(polygon.area, rel=1e-12), name
+        rings = [polygon.exterior, *polygon.interiors]
+        vertices = np.unique(np.vstack([np.asarray(r.coords) for r in rings]), axis=0)
+        assert (np.unique(domain.points, axis=0) == vertices).all(), name
+        holes[name] = len(polygon.interiors)
+    assert holes["sans B"] == holes["sans 8"] == holes["serif B"] == 2
+    assert holes["sans k"] == holes["sans M"] == holes["serif 5"] == 0
+    assert [holes[f"sans % {k}"] for k in (1, 2, 3)].count(1) == 2  # two rings and a bar
+
+
 def test_the_planar_graphs_match_triangles_reading_of_the_same_graphs():
     """Each graph of the planar-graphs set is the domain Triangle's -p makes
     of the same vertices, segments and holes: the same area and the same

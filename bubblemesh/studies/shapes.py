@@ -7,6 +7,7 @@ Frontal-Delaunay and Triangle -pq30 at matched counts.
     python -m bubblemesh.studies.shapes --set triangle-examples --sizes 100 300 1000 3000
     python -m bubblemesh.studies.shapes --set planar-graphs --sizes 30 100 1000
     python -m bubblemesh.studies.shapes --set shapely --sizes 30 100 1000
+    python -m bubblemesh.studies.shapes --set glyphs --sizes 30 100 1000
 
 ``--set rectangles`` sweeps long rectangles (channels 4 to 30 times longer
 than wide) instead of the shapes; ``--set triangle-examples`` the ``.poly``
@@ -15,7 +16,8 @@ holes, interior constraints, free points, a lake with islands), read by
 :meth:`bubblemesh.Domain.from_poly`; ``--set planar-graphs`` planar graphs
 of several materials (:func:`planar_graphs`, by
 :meth:`bubblemesh.Domain.from_pslg`); ``--set shapely`` shapes drawn with
-shapely (:func:`shapely_inputs`).
+shapely (:func:`shapely_inputs`); ``--set glyphs`` letter outlines
+(:func:`glyph_inputs`).
 
 Every shape is meshed with max_area = area / k for each k of ``--sizes``; the
 rows are :func:`bubblemesh.studies.quality.case_rows` (Gmsh on bm's refined
@@ -235,8 +237,41 @@ def shapely_shapes():
         yield name, bm.Domain.from_shapely(polygon)
 
 
+GLYPHS = (("DejaVu Sans", "B8&@gaQRkM%"), ("DejaVu Serif", "BgaR&5"))
+
+
+def glyph_inputs():
+    """(name, shapely Polygon): the outlines of the GLYPHS in matplotlib's
+    own DejaVu fonts (a text path at size 1, its curves flattened by
+    matplotlib), one polygon per connected part (the rings nested even-odd):
+    curves in many short pieces beside long stems, serifs, strokes a few
+    elements wide and counters (holes), as a logo or a label comes."""
+    from matplotlib.font_manager import FontProperties  # optional: the plot extra
+    from matplotlib.textpath import TextPath
+    from shapely import geometry as sg
+
+    for family, characters in GLYPHS:
+        for character in characters:
+            path = TextPath((0.0, 0.0), character, size=1.0, prop=FontProperties(family=family))
+            rings = sorted((sg.Polygon(ring) for ring in path.to_polygons(closed_only=True)),
+                           key=lambda ring: -ring.area)
+            shape = rings[0]
+            for ring in rings[1:]:
+                shape = shape.symmetric_difference(ring)
+            parts = getattr(shape, "geoms", [shape])
+            for k, part in enumerate(parts):
+                tail = f" {k + 1}" if len(parts) > 1 else ""
+                yield f"{family.split()[-1].lower()} {character}{tail}", sg.polygon.orient(part)
+
+
+def glyphs():
+    """(name, domain) for each of :func:`glyph_inputs`."""
+    for name, polygon in glyph_inputs():
+        yield name, bm.Domain.from_shapely(polygon)
+
+
 SETS = {"shapes": shapes, "rectangles": rectangles, "triangle-examples": triangle_examples,
-        "planar-graphs": planar_graphs, "shapely": shapely_shapes}
+        "planar-graphs": planar_graphs, "shapely": shapely_shapes, "glyphs": glyphs}
 
 
 def sweep(sizes=SIZES, out_dir=None, names=None, which="shapes"):
@@ -264,7 +299,8 @@ def main():
     parser.add_argument("--only", nargs="+", default=None, help="only these shapes")
     parser.add_argument("--set", choices=sorted(SETS), default="shapes", dest="which",
                         help="the shapes a user would bring, long rectangles, "
-                        "Triangle's example files, planar graphs or shapely drawings")
+                        "Triangle's example files, planar graphs, shapely drawings or letter "
+                        "outlines")
     parser.add_argument("--out", type=Path, default=None,
                         help="write shapes_vs_gmsh.csv (rectangles_vs_gmsh.csv) here")
     args = parser.parse_args()
