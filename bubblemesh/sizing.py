@@ -46,9 +46,10 @@ __all__ = ["SizeField", "as_size_function", "cone_at", "field_at", "field_count"
 
 SAMPLING = 0.5  # boundary samples are spaced <= SAMPLING * h
 FEATURE_SLACK = 1.25  # on the boundary h <= FEATURE_SLACK * feature size
-# gaps thinner than this fraction of the local input segment length are not
-# resolved (a node an ulp from a segment would otherwise ask for sizes of ~0)
-FEATURE_FLOOR = 1e-2
+# gaps thinner than this fraction of the local input segment length are not resolved
+# (a node an ulp from a segment would ask for sizes of ~0) but left to the other sizes:
+# held at the floor instead, a long gap just under it would fill with floor-sized slivers
+FEATURE_FLOOR = 1e-4
 QUADTREE_SAMPLING = 0.7  # quadtree cells have sides <= QUADTREE_SAMPLING * user size
 MAX_SOURCES = 2**24  # beyond this the requested sizes are unreasonably small
 _LEAF = 8  # items per tree leaf
@@ -367,10 +368,11 @@ class _Boundary:
         self.a_sorted = np.ascontiguousarray(self.a[self.tree.order])
         self.b_sorted = np.ascontiguousarray(self.b[self.tree.order])
 
-    def feature_size(self, xy: np.ndarray, excluded: np.ndarray) -> np.ndarray:
-        """(b): distance from each point to the segments not in its row of
-        ``excluded``, at least FEATURE_FLOOR times its own segments' length
-        (the first two entries of the row)."""
+    def feature_size(self, xy: np.ndarray, excluded: np.ndarray) -> tuple:
+        """(b) at each point: (the distance to the segments not in its row of
+        ``excluded``, the floor: FEATURE_FLOOR times the point's own
+        segments' length, the first two entries of the row).  The feature
+        size is the distance where it reaches the floor (:func:`_resolved`)."""
         t = self.tree
         distance = _feature_distance(
             xy, excluded, self.ids, self.a_sorted, self.b_sorted, t.start, t.end, t.left, t.box
@@ -378,7 +380,7 @@ class _Boundary:
         first, second = excluded[:, 0], excluded[:, 1]
         own = np.minimum(self.length[first], self.length[second])
         own[(first < 0) | (second < 0)] = 0.0  # a free point: on no segment
-        return np.maximum(distance, FEATURE_FLOOR * own)
+        return distance, FEATURE_FLOOR * own
 
     def along(self, segment: np.ndarray) -> np.ndarray:
         """Exclusion rows for points inside segments: the segment, its two
@@ -400,6 +402,11 @@ def _incident(ends: np.ndarray, n: int) -> np.ndarray:
     rank = np.arange(len(node)) - np.concatenate([[0], np.cumsum(count)])[node]
     out[node, rank] = seg
     return out
+
+
+def _resolved(distance, floor):
+    """The feature size (b): the distance, or inf (no size) for a gap below the floor."""
+    return np.where(distance >= floor, distance, np.inf)
 
 
 # --- user size ---------------------------------------------------------------------------
@@ -579,7 +586,7 @@ def _node_sources(domain, boundary, user, cap):
     excluded = np.column_stack([seg_from, boundary.prev[seg_from], seg_from,
                                 boundary.incident])
     excluded[free, :3] = -1
-    values = np.minimum(spacing, boundary.feature_size(domain.points, excluded))
+    values = np.minimum(spacing, _resolved(*boundary.feature_size(domain.points, excluded)))
     if user is not None:
         values = np.minimum(values, user(domain.points))
     return np.array(domain.points), np.minimum(values, cap)
@@ -589,29 +596,34 @@ def _segment_sources(boundary, nodes, user, max_sources):
     """Samples inside the segments where the feature size (b) or a callable
     user size (c) may dip below the field of the nodes.
 
-    On an interval of length L of segment s the feature size is >= (f0 + f1 - L) / 2
-    (it is 1-Lipschitz; f0, f1 its values at the ends) and the final field is
-    <= min(e0, e1) + g L / 2 (e: the field's bound at the ends).  The interval is
-    halved while the first is below the second over FEATURE_SLACK, so on the
+    On an interval of length L of segment s the distance d to the other
+    segments is 1-Lipschitz, so with f = max(d, floor) (the segment's floor,
+    below which the feature size is inf) the feature size is >= (f0 + f1 - L) / 2
+    (f0, f1 at the ends), and inf all over if (d0 + d1 + L) / 2 < floor; the
+    final field is <= min(e0, e1) + g L / 2 (e: the field's bound at the ends).
+    The interval is halved while the first is below the second over
+    FEATURE_SLACK, unless the gap is below the floor all over, so on the
     boundary h <= FEATURE_SLACK * feature size; with a callable user size also
     while L > SAMPLING * its smaller end value.  Returns the samples whose value
     is below the node field (the others are dominated)."""
     seg = np.arange(len(boundary.a), dtype=np.int64)
     t0, t1 = np.zeros(len(seg)), np.ones(len(seg))
     ends = [_sample_values(boundary, nodes, user, seg, t) for t in (t0, t1)]
-    (f0, u0, _, e0, _), (f1, u1, _, e1, _) = ends  # at the nodes: the node field
+    (d0, floor, u0, _, e0, _), (d1, _, u1, _, e1, _) = ends  # at the nodes: the node field
     g = nodes.gradation
     kept_p, kept_v = [], []
     total = 0
     for _ in range(60):  # t halves each round: 2**-60 is below any float spacing
         L = (t1 - t0) * boundary.length[seg]
-        split = 0.5 * (f0 + f1 - L) < (np.minimum(e0, e1) + 0.5 * g * L) / FEATURE_SLACK
+        bound = 0.5 * (np.maximum(d0, floor) + np.maximum(d1, floor) - L)
+        split = bound < (np.minimum(e0, e1) + 0.5 * g * L) / FEATURE_SLACK
+        split &= 0.5 * (d0 + d1 + L) >= floor
         if user is not None:
             split |= L > SAMPLING * np.minimum(u0, u1)
         if not split.any():
             break
         seg, t0, t1 = seg[split], t0[split], t1[split]
-        f0, f1, u0, u1, e0, e1 = (v[split] for v in (f0, f1, u0, u1, e0, e1))
+        d0, d1, floor, u0, u1, e0, e1 = (v[split] for v in (d0, d1, floor, u0, u1, e0, e1))
         tm = 0.5 * (t0 + t1)
         total += len(tm)
         if total > max_sources:
@@ -619,14 +631,15 @@ def _segment_sources(boundary, nodes, user, max_sources):
                 f"the size field needs more than {max_sources} boundary samples: the sizes "
                 "(user size or feature size) are too small for this domain"
             )
-        fm, um, value, em_nodes, xy = _sample_values(boundary, nodes, user, seg, tm)
+        dm, _, um, value, em_nodes, xy = _sample_values(boundary, nodes, user, seg, tm)
         useful = value < em_nodes
         em = np.minimum(value, em_nodes)
         kept_p.append(xy[useful])
         kept_v.append(value[useful])
         seg = np.concatenate([seg, seg])
         t0, t1 = np.concatenate([t0, tm]), np.concatenate([tm, t1])
-        f0, f1 = np.concatenate([f0, fm]), np.concatenate([fm, f1])
+        d0, d1 = np.concatenate([d0, dm]), np.concatenate([dm, d1])
+        floor = np.concatenate([floor, floor])
         u0, u1 = np.concatenate([u0, um]), np.concatenate([um, u1])
         e0, e1 = np.concatenate([e0, em]), np.concatenate([em, e1])
     if not kept_p:
@@ -635,13 +648,14 @@ def _segment_sources(boundary, nodes, user, max_sources):
 
 
 def _sample_values(boundary, nodes, user, seg, t):
-    """At p = a + t (b - a) on each segment: (feature size, user size, the
-    sample's input value, the node field, p)."""
+    """At p = a + t (b - a) on each segment: (the distance and the floor of
+    the feature size, the user size, the sample's input value, the node
+    field, p)."""
     xy = boundary.a[seg] + t[:, None] * (boundary.b[seg] - boundary.a[seg])
-    feature = boundary.feature_size(xy, boundary.along(seg))
+    distance, floor = boundary.feature_size(xy, boundary.along(seg))
     user_value = np.full(len(t), np.inf) if user is None else user(xy)
-    value = np.minimum(np.minimum(feature, user_value), nodes.cap)
-    return feature, user_value, value, nodes(xy), xy
+    value = np.minimum(np.minimum(_resolved(distance, floor), user_value), nodes.cap)
+    return distance, floor, user_value, value, nodes(xy), xy
 
 
 def _quadtree_sources(domain, field, user, room):
