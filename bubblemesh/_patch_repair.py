@@ -28,6 +28,12 @@ below 0.7 is this population defect.  So, worst triangle first:
   the first repair, every changed triangle keeps its area bound and the
   element count stays in the window ``counts`` (or comes closer to it).
 
+Where a triangle below POOR_RATIO must be mended and the mean may not bar
+it, a variant may instead be required to lift every changed triangle to a
+floor; where a rise of the smallest ratio alone would make more triangles
+below POOR_RATIO (lifting a poor one step by step fills its row with them),
+that can be barred.
+
 Rounds stop when the worst triangle is at least ``below``, when no variant
 of any triangle below it pays (FAILED triangles tried in vain at most: one
 at a sharp corner cannot be mended, and must not hide the rest), or after
@@ -52,6 +58,7 @@ from ._smoothing import compass_polish, star_buffer, stars, triangle_quality
 from .errors import GeometryError
 from .triangulation import constrained_delaunay
 
+POOR_RATIO = 0.7  # the ratio every element off a too-sharp corner should reach
 FAILED = 16  # triangles none of whose variants pays, at most, before the rounds stop
 RISE = 1e-9  # a smaller rise of the smallest ratio is rounding, not a repair
 MEAN_DROP = 1e-3  # the repairs may lower the mesh's mean ratio by at most this in all
@@ -63,27 +70,35 @@ MEAN_CANDIDATES = 24  # nodes tried per round when removals are ranked by the me
 MEAN_INSERTS = 8  # triangles tried per round when insertions are ranked by the mean
 
 
-def repair_worst(X, T, segments, movable, limit, below, rounds, counts, halvings, steps):
+def repair_worst(X, T, segments, movable, limit, below, rounds, counts, halvings, steps,
+                 drop=MEAN_DROP, held=None, floor=None, poor_kept=False):
     """Re-triangulate the patches around the worst triangles (module
     docstring).  X (n, 2), T (m, 3) CCW, ``movable`` (n,) free nodes,
     ``limit`` (m,) area bound of each triangle, ``counts`` (low, high) the
     element counts a variant may leave; ``halvings`` and ``steps`` as in
-    :func:`~bubblemesh._odt.mean_polish`.  Returns (X, T, old, operations):
+    :func:`~bubblemesh._odt.mean_polish`; ``drop`` how far the mesh mean may
+    fall in all; triangles touching a ``held`` node (n,) are not picked;
+    with a ``floor`` a variant's changed triangles must all reach it;
+    with ``poor_kept`` they may not hold more below POOR_RATIO than before (a
+    rise of their smallest ratio is no reason to make more of those).
+    Returns (X, T, old, operations):
     the new arrays, with the removed nodes gone and the inserted ones after
     the old (node numbers below the first removed one unchanged), ``old``
     each node's number in X (-1: inserted) and the number of variants kept."""
     lowest = float(triangle_quality(np.asarray(X, np.float64), np.asarray(T, np.int64)).mean()
-                   if len(T) else 1.0) - MEAN_DROP
+                   if len(T) else 1.0) - drop
 
     failed = set()  # vertex triples none of whose variants paid (nodes keep their numbers)
 
     def pick(X, T, q, ptr, idx, free, limit, walls):
         for t in _worst(q, below):
+            if held is not None and _padded(held, len(X))[T[t]].any():
+                continue
             key = tuple(sorted(T[t].tolist()))
             if key in failed:
                 continue
             best = _best_variant(X, T, q, ptr, idx, int(t), free, limit, walls, halvings,
-                                 steps, counts, lowest)
+                                 steps, counts, lowest, floor, poor_kept)
             if best is not None:
                 return best
             failed.add(key)
@@ -282,7 +297,7 @@ def _allowed(m, grown, counts):
 
 
 def _best_variant(X, T, q, ptr, idx, t, free, limit, walls, halvings, steps, counts,
-                  lowest):
+                  lowest, floor=None, poor_kept=False):
     """The best kept variant for triangle t as (patch, new triangles, new
     points, removed node, relaxed nodes and their positions, score) that
     leaves a mesh mean of at least ``lowest``, or None."""
@@ -293,17 +308,18 @@ def _best_variant(X, T, q, ptr, idx, t, free, limit, walls, halvings, steps, cou
     tries = [(corners, added, removed) for corners, added, removed
              in _variants(X, T, across, t, free, walls)
              if _allowed(m, m + 2 * len(added) - (2 if removed >= 0 else 0), counts)]
-    return _best_of(X, T, q, ptr, idx, tries, free, limit, walls, halvings, steps, None,
-                    lowest)
+    return _best_of(X, T, q, ptr, idx, tries, free, limit, walls, halvings, steps, floor,
+                    lowest, poor_kept=poor_kept)
 
 
 def _best_of(X, T, q, ptr, idx, tries, free, limit, walls, halvings, steps, floor, mean,
-             by_mean=False):
+             by_mean=False, poor_kept=False):
     """The best of the variants ``tries`` (patch corner nodes, added points,
     removed node) by (smallest ratio of the changed triangles, mesh mean),
     or ``by_mean`` the other way round: each must raise that smallest ratio
     (``floor`` None) or keep it at least ``floor``, keep every area bound
-    and leave a mesh mean of at least ``mean`` (None: any)."""
+    and leave a mesh mean of at least ``mean`` (None: any); with
+    ``poor_kept`` hold no more triangles below POOR_RATIO than before."""
     best, total, m = None, float(q.sum()), len(T)
     for corners, added, removed in tries:
         growth = 2 * len(added) - (2 if removed >= 0 else 0)
@@ -312,7 +328,7 @@ def _best_of(X, T, q, ptr, idx, tries, free, limit, walls, halvings, steps, floo
         if made is None:
             continue
         tried = _relax(X, T, q, ptr, idx, patch, made, np.asarray(added).reshape(-1, 2), free,
-                       limit, halvings, steps, floor)
+                       limit, halvings, steps, floor, poor_kept)
         if tried is None:
             continue
         low, gain, nodes, positions = tried
@@ -383,12 +399,13 @@ def _retriangulate(X, T, patch, added, removed, walls):
 
 
 def _relax(X, T, q, ptr, idx, patch, made, added, free, limit, halvings, steps,
-           floor=None):
+           floor=None, poor_kept=False):
     """Relax the free nodes of ``made`` (the patch's new triangles) and
     their neighbours on a copy; (smallest ratio of the changed triangles,
     change of the summed ratio, relaxed global nodes, their positions), or
-    None if the smallest ratio does not rise (is below ``floor``, if given)
-    or an area bound breaks."""
+    None if the smallest ratio does not rise (is below ``floor``, if given),
+    an area bound breaks or, with ``poor_kept``, more of them (not counting
+    the neighbours none of whose nodes moved) are below POOR_RATIO."""
     n = len(X)
     ring = np.unique(made)
     outside = _minus(np.unique(np.concatenate([idx[ptr[v]:ptr[v + 1]]
@@ -420,6 +437,9 @@ def _relax(X, T, q, ptr, idx, patch, made, added, free, limit, halvings, steps,
     ql = triangle_quality(Xl, Tl)
     low = float(ql[~held].min())
     if short(low):
+        return None
+    if poor_kept and int((ql[~held] < POOR_RATIO).sum()) > int(
+            (q[patch] < POOR_RATIO).sum() + (q[old[~held[:len(old)]]] < POOR_RATIO).sum()):
         return None
     bound = np.concatenate([limit[old], np.full(len(made), limit[patch].min())])
     if (_areas(Xl, Tl) > bound).any():

@@ -121,7 +121,7 @@ from ._lattice import lattice_points
 from ._mesh import GenerationStats, Mesh, OptimizationStats, _half_mean_edge
 from ._minmax import minmax_patches
 from ._odt import mean_polish, odt_smooth
-from ._patch_repair import RISE, balance_count, prune_nodes, repair_worst
+from ._patch_repair import MEAN_DROP, POOR_RATIO, RISE, balance_count, prune_nodes, repair_worst
 from ._relaxed_flips import relaxed_flips
 from ._rings import node_adjacency, ring_neighbors, vertex_triangles
 from ._seeds import frontal_seeds, inside
@@ -163,7 +163,7 @@ REPAIR_OPS = 16  # at most this many of them
 REPAIR_SPARE = 4  # or this many nodes past it, when a balance elsewhere then takes them back
 REPAIR_WINDOW = 0.035  # they keep the element count this close to the field's (or bring it closer)
 REPAIR_REACH = 0.01  # or, for triangles below POOR_RATIO, this close to its own (_repair_counts)
-POOR_RATIO = 0.7  # the ratio every element off a too-sharp corner should reach
+POOR_SUM_DROP = 1.0  # then the repair may lower the summed ratio by this (small meshes)
 BALANCE_WINDOW = 0.03  # a count further off the field's gets nodes removed or inserted
 BALANCE_OPS = 32  # at most this many
 BALANCE_SHARE = 0.05  # nor when the count is further off than this share of the field's
@@ -531,10 +531,14 @@ def _matched(domain, mesh, goal, frontal, seeded, rescaled, notes, max_area, pro
 
 
 def _as_good(a, b):
-    """Is mesh a's mean radius ratio (eq. 10) at least b's, to MEAN_TIE?  A
-    mesh made on rescaled sizes must pay for itself in quality: fitting the
-    field's count is no reason to take it."""
-    return bool(a.quality().mean() >= b.quality().mean() - MEAN_TIE)
+    """Has mesh a fewer triangles below a radius ratio (eq. 10) of 0.7 than b,
+    or a mean ratio at least b's, to MEAN_TIE?  A mesh made on rescaled sizes
+    must pay for itself in quality: fitting the field's count is no reason
+    to take it."""
+    qa, qb = a.quality(), b.quality()
+    if (qa < 0.7).sum() != (qb < 0.7).sum():
+        return bool((qa < 0.7).sum() < (qb < 0.7).sum())
+    return bool(qa.mean() >= qb.mean() - MEAN_TIE)
 
 
 def _steeper_gradation(domain, size, max_area, field, mesh):
@@ -1153,7 +1157,14 @@ def _repaired_once(mesh, max_area, field, by_mean):
     smallest ratio, the count within REPAIR_WINDOW of the field's or brought
     closer to it (first, for those below POOR_RATIO where no balance
     follows, within REPAIR_REACH of its own: :func:`_repair_counts`); both
-    within the area bounds.  In meshes of
+    within the area bounds.  Where triangles below POOR_RATIO touching no
+    sharp corner remain in a mesh of at most BALANCE_BELOW elements, they get
+    a second try whose variants must lift every changed triangle to
+    POOR_RATIO and may lower the summed ratio by POOR_SUM_DROP (the mean of a
+    small mesh moves by O(1/m) with any local change, past MEAN_DROP).  The
+    repair of the triangles below REPAIR_BELOW after it adds no triangle below
+    POOR_RATIO (past a poor triangle its smallest ratio rising is no reason to
+    make more of them).  In meshes of
     at most BALANCE_BELOW elements the repair then goes on with the count
     free to go REPAIR_SPARE nodes further (a node inserted where a corner or
     a row lacks one), is balanced back into BALANCE_WINDOW
@@ -1206,8 +1217,15 @@ def _repaired_once(mesh, max_area, field, by_mean):
         if triangle_quality(X, T).min(initial=1.0) < POOR_RATIO:
             run(repair_worst, POOR_RATIO, REPAIR_OPS, _repair_counts(len(T), asked),
                 MEAN_HALVINGS, MEAN_STEPS)
+            sharp = sharp_corner_flags(mesh.domain, X)
+            if _poor_off(X, T, sharp) and len(T) <= BALANCE_BELOW:
+                # a small mesh's mean moves by O(1/m) with any local change: no repair of
+                # a poor triangle fits in MEAN_DROP there
+                run(repair_worst, POOR_RATIO, REPAIR_OPS, _repair_counts(len(T), asked),
+                    MEAN_HALVINGS, MEAN_STEPS, max(MEAN_DROP, POOR_SUM_DROP / len(T)), sharp,
+                    POOR_RATIO)
         run(repair_worst, REPAIR_BELOW, REPAIR_OPS, window(REPAIR_WINDOW), MEAN_HALVINGS,
-            MEAN_STEPS)
+            MEAN_STEPS, MEAN_DROP, None, None, True)
         low, high = window(REPAIR_WINDOW)
         blocked = not low + 2 <= len(T) <= high - 4  # two points add four triangles
         if (REPAIR_SPARE and blocked and before <= BALANCE_BELOW
@@ -1218,7 +1236,7 @@ def _repaired_once(mesh, max_area, field, by_mean):
             floor = plain_min if plain_fits else min(plain_min, REPAIR_BELOW)
             run(repair_worst, REPAIR_BELOW, REPAIR_OPS, (low - 2 * REPAIR_SPARE,
                                                            high + 2 * REPAIR_SPARE),
-                MEAN_HALVINGS, MEAN_STEPS)
+                MEAN_HALVINGS, MEAN_STEPS, MEAN_DROP, None, None, True)
             if not window(BALANCE_WINDOW)[0] <= len(T) <= window(BALANCE_WINDOW)[1]:
                 run(balance_count, window(BALANCE_WINDOW), field, BALANCE_OPS, MEAN_HALVINGS,
                     MEAN_STEPS, floor + RISE, _fine_walls_first_row(X, T, segments, field))
@@ -1232,6 +1250,11 @@ def _repaired_once(mesh, max_area, field, by_mean):
                     min_ratio=_smallest_ratio(X, T))
     return replace(mesh, points=X, triangles=T, neighbors=N, radii=radii,
                    optimization=stats), off
+
+
+def _poor_off(X, T, sharp):
+    """Are there triangles below POOR_RATIO touching no ``sharp`` node?"""
+    return bool(((triangle_quality(X, T) < POOR_RATIO) & ~sharp[T].any(axis=1)).any())
 
 
 def _repair_counts(count, asked):

@@ -4,7 +4,12 @@ smallest ratio strictly up with every kept variant, the mean down by at most
 the MEAN_DROP budget in all, the area bounds and the count window, same bits
 on a second run; a node put into a perfect lattice taken out again (also
 behind worse triangles no variant can mend, beside it and elsewhere), and a
-gap one triangle high given nodes.
+gap one triangle high given nodes; with ``poor_kept`` no more triangles
+below 0.7 made while the worst rises.  A poor triangle all of whose nodes are
+on the boundary (a serif five's stroke) mended once the mean may fall by a
+share of its sum, not while its nodes are held; bm.mesh then leaves that
+outline none below 0.7.  A rescaled mesh with fewer triangles below 0.7 is
+kept over a higher mean.
 The count balance before it: the count moved two triangles per node toward
 its window and never past it, the minimum never lowered, the most crowded
 node the one removed (off the walls' first row when none there can go: a
@@ -22,6 +27,7 @@ ratio from the classical formulas), numpy areas and valence counts."""
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -244,6 +250,33 @@ def test_a_gap_one_row_high_gets_nodes(height):
     np.testing.assert_array_equal(Y[: len(P)], P)
     O.check_valid(Y, t)
     O.check_conforming(Y, t, domain.segments, area=8 * height, rel=1e-12)
+
+
+@pytest.mark.parametrize("height", [2.0, 2.4, 3.0])
+def test_with_poor_kept_the_repair_makes_no_more_triangles_below_0_7(height):
+    """The strip one row high: lifting its worst triangle step by step fills
+    it with more triangles below POOR_RATIO (at height 2, 2 become 13).  With
+    ``poor_kept`` no kept variant adds one: the count below it never rises,
+    and where some variant lifts the worst without that (heights 2.4 and 3)
+    the smallest ratio still rises."""
+    domain = _strip(8, height)
+    P, segments = np.asarray(domain.points), np.asarray(domain.segments)
+    tri = np.asarray(bm.constrained_delaunay(P, segments)[0])
+    q0 = O.radius_ratio_reference(P, tri)
+    results = []
+    for poor_kept in (False, True):
+        Y, t, _, ops = repair_worst(P, tri, segments, np.zeros(len(P), np.bool_),
+                                    np.full(len(tri), np.inf), 1.0, 8, EVERY, HALVINGS, STEPS,
+                                    MEAN_DROP, None, None, poor_kept)
+        results.append((O.radius_ratio_reference(Y, t), ops))
+        O.check_conforming(Y, t, segments, area=8 * height, rel=1e-12)
+    (q_free, _), (q_kept, ops) = results
+    poor = pipeline.POOR_RATIO
+    assert (q_kept < poor).sum() <= (q0 < poor).sum()
+    if height == 2.0:
+        assert (q_free < poor).sum() > (q0 < poor).sum()
+    else:
+        assert ops >= 1 and q_kept.min() > q0.min()
 
 
 def test_the_count_window_holds_the_count():
@@ -761,3 +794,89 @@ def test_the_balance_evaluates_the_size_only_at_points_it_has_not_seen(calls):
         seen = np.vstack(asked).tolist() if asked else []
         assert sorted(seen) == sorted(new)
         before = xy
+
+
+# a stroke of DejaVu Serif's "5" (matplotlib's outline, rounded to 1e-4): at area/30
+# its bowl is one triangle across, and two input nodes face each other over it
+FIVE = [(0.503, 0.7291), (0.1172, 0.7291), (0.1172, 0.3628), (0.1592, 0.3628),
+        (0.1869, 0.3912), (0.2184, 0.4111), (0.2546, 0.4228), (0.2959, 0.4267),
+        (0.3645, 0.4141), (0.4148, 0.3761), (0.4458, 0.3146), (0.4561, 0.2309),
+        (0.4457, 0.1469), (0.4145, 0.085), (0.3642, 0.0469), (0.2959, 0.0342),
+        (0.2321, 0.0434), (0.1842, 0.0708), (0.1534, 0.1156), (0.1402, 0.1767),
+        (0.085, 0.1767), (0.085, 0.0352), (0.1395, 0.0135), (0.1928, -0.0019),
+        (0.245, -0.0111), (0.2959, -0.0142), (0.407, 0.002), (0.49, 0.0505),
+        (0.5418, 0.128), (0.5591, 0.2309), (0.542, 0.3323), (0.4906, 0.4097),
+        (0.4099, 0.4588), (0.3042, 0.4752), (0.2642, 0.4729), (0.2283, 0.4662),
+        (0.1965, 0.4553), (0.1689, 0.44), (0.1689, 0.6489), (0.503, 0.6489)]
+
+
+def test_a_poor_triangle_is_mended_where_the_mean_may_fall_by_a_share_of_its_sum(
+        monkeypatch):
+    """The serif five at area/30 without the second repair of triangles below
+    POOR_RATIO keeps one below it, all of whose nodes are on the boundary.
+    Within MEAN_DROP no variant lifts it to POOR_RATIO, nor any when its
+    nodes are held; with the mean free to fall by 1 / m (the summed ratio by
+    1) one does: every triangle at least POOR_RATIO, the mean within that
+    fall, the boundary nodes unmoved, the mesh valid and conforming."""
+    domain = bm.Domain.from_loops([np.array(FIVE)])
+    monkeypatch.setattr(pipeline, "POOR_SUM_DROP", 0.0)
+    with pytest.warns(bm.QualityWarning):
+        m = bm.mesh(domain, max_area=domain.area / 30)
+    X, tri, segments = m.points, m.triangles, np.asarray(m.segments)
+    q0 = O.radius_ratio_reference(X, tri)
+    poor = q0 < pipeline.POOR_RATIO
+    assert poor.sum() == 1 and (tri[poor] < m.n_boundary).all()
+    movable = np.arange(len(X)) >= m.n_boundary
+    held = np.zeros(len(X), np.bool_)
+    held[tri[poor]] = True
+    limit = np.full(len(tri), np.inf)
+
+    def repair(drop, nodes=None):
+        return repair_worst(X, tri, segments, movable, limit, pipeline.POOR_RATIO, 16, EVERY,
+                            HALVINGS, STEPS, drop, nodes, pipeline.POOR_RATIO)
+
+    assert repair(MEAN_DROP)[3] == 0
+    assert repair(1.0 / len(tri), held)[3] == 0
+    Y, t, old, operations = repair(1.0 / len(tri))
+    q = O.radius_ratio_reference(Y, t)
+    assert operations >= 1 and q.min() >= pipeline.POOR_RATIO
+    assert q.mean() >= q0.mean() - 1.0 / len(tri) - 1e-12
+    np.testing.assert_array_equal(old[:m.n_boundary], np.arange(m.n_boundary))
+    np.testing.assert_array_equal(Y[:m.n_boundary], X[:m.n_boundary])
+    O.check_valid(Y, t)
+    O.check_conforming(Y, t, segments, area=domain.area, rel=1e-9)
+
+
+@pytest.mark.heavy
+@pytest.mark.parametrize("k", [20, 30, 35, 40])
+def test_bm_mesh_leaves_the_serif_five_no_triangle_below_poor_ratio(k):
+    """bm.mesh of the serif five at area/k: no triangle below POOR_RATIO (its
+    corners are all wider than 26 degrees), so no QualityWarning, and the
+    count within 5% of the field's integral."""
+    from bubblemesh.studies import quality as Q
+
+    domain = bm.Domain.from_loops([np.array(FIVE)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", bm.QualityWarning)
+        m = bm.mesh(domain, max_area=domain.area / k)
+    assert O.radius_ratio_reference(m.points, m.triangles).min() >= pipeline.POOR_RATIO
+    field = pipeline.size_field(domain, max_area=domain.area / k)
+    assert abs(len(m.triangles) / Q.predicted_count(domain, field).count - 1) <= 0.05
+    O.check_conforming(m.points, m.triangles, m.segments, area=domain.area, rel=1e-9)
+
+
+def test_a_rescaled_mesh_with_fewer_triangles_below_0_7_is_as_good():
+    """A mesh made on rescaled sizes is kept over a higher mean only when it
+    has fewer triangles below 0.7; with as many, the mean decides."""
+
+    class Ratios:
+        def __init__(self, *q):
+            self.q = np.array(q)
+
+        def quality(self):
+            return self.q
+
+    assert pipeline._as_good(Ratios(0.75, 0.8), Ratios(0.69, 0.99))
+    assert not pipeline._as_good(Ratios(0.69, 0.8), Ratios(0.75, 0.99))
+    assert not pipeline._as_good(Ratios(0.8, 0.9), Ratios(0.8, 0.95))
+    assert pipeline._as_good(Ratios(0.8, 0.95), Ratios(0.8, 0.95 + 0.5 * pipeline.MEAN_TIE))
