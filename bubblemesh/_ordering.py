@@ -8,35 +8,59 @@ renumbering of the §2 mesh.
 import numpy as np
 from numba import njit, prange
 
+_BLOCK = 1024  # keys a thread computes in turn
 SMALL = 4096  # fewer keys are sorted by numpy (the radix sort's 65536 bins cost more)
+
+
+@njit(cache=True, inline="always")
+def _frame(P):
+    xmin = P[:, 0].min()
+    ymin = P[:, 1].min()
+    span = max(P[:, 0].max() - xmin, P[:, 1].max() - ymin)
+    return xmin, ymin, span if span > 0.0 else 1.0
+
+
+@njit(cache=True, inline="always")
+def _hilbert_key(px, py, xmin, ymin, span, bits):
+    side = (1 << bits) - 1
+    x = int((px - xmin) / span * side)
+    y = int((py - ymin) / span * side)
+    d = 0
+    s = 1 << (bits - 1)
+    while s > 0:
+        rx = 1 if (x & s) > 0 else 0
+        ry = 1 if (y & s) > 0 else 0
+        d += s * s * ((3 * rx) ^ ry)
+        if ry == 0:
+            if rx == 1:
+                x = side - x
+                y = side - y
+            x, y = y, x
+        s >>= 1
+    return d
+
+
+@njit(cache=True, inline="always")
+def _fill(P, bits, frame, keys, lo, hi):
+    for k in range(lo, hi):
+        keys[k] = _hilbert_key(P[k, 0], P[k, 1], frame[0], frame[1], frame[2], bits)
 
 
 @njit(cache=True, parallel=True)
 def _hilbert_keys(P, bits):
-    n = P.shape[0]
-    xmin = P[:, 0].min()
-    ymin = P[:, 1].min()
-    span = max(P[:, 0].max() - xmin, P[:, 1].max() - ymin)
-    if span == 0.0:
-        span = 1.0
-    side = (1 << bits) - 1
-    keys = np.empty(n, np.int64)
-    for k in prange(n):
-        x = int((P[k, 0] - xmin) / span * side)
-        y = int((P[k, 1] - ymin) / span * side)
-        d = 0
-        s = 1 << (bits - 1)
-        while s > 0:
-            rx = 1 if (x & s) > 0 else 0
-            ry = 1 if (y & s) > 0 else 0
-            d += s * s * ((3 * rx) ^ ry)
-            if ry == 0:
-                if rx == 1:
-                    x = side - x
-                    y = side - y
-                x, y = y, x
-            s >>= 1
-        keys[k] = d
+    keys = np.empty(P.shape[0], np.int64)
+    frame = _frame(P)
+    for block in prange((P.shape[0] + _BLOCK - 1) // _BLOCK):
+        _fill(P, bits, frame, keys, block * _BLOCK, min(P.shape[0], (block + 1) * _BLOCK))
+    return keys
+
+
+@njit(cache=True)
+def _hilbert_keys_serial(P, bits):
+    """:func:`_hilbert_keys` in one thread (starting the pool costs more for a
+    patch's few points)."""
+    keys = np.empty(P.shape[0], np.int64)
+    _fill(P, bits, _frame(P), keys, 0, P.shape[0])
     return keys
 
 
@@ -68,7 +92,8 @@ def hilbert_order(points: np.ndarray) -> np.ndarray:
     previous one, so the walking point location takes O(1) steps on average."""
     if len(points) == 0:
         return np.zeros(0, np.int64)
-    keys = _hilbert_keys(np.ascontiguousarray(points, dtype=np.float64), 16)
-    if len(keys) < SMALL:  # the same order: a stable sort of the same keys
-        return np.argsort(keys, kind="stable")
+    P = np.ascontiguousarray(points, dtype=np.float64)
+    if len(P) < SMALL:  # the same order: a stable sort of the same keys
+        return np.argsort(_hilbert_keys_serial(P, 16), kind="stable")
+    keys = _hilbert_keys(P, 16)
     return _radix_argsort(keys, 2)  # keys < 4**16

@@ -18,6 +18,8 @@ from ._status import ERR_SEGMENTS_CROSS, ERR_STACK, ERR_VERTEX_ON_SEGMENT, OK, r
 from .errors import GeometryError
 from .predicates import orient2d, out_of_range, out_of_range_message
 
+SMALL_SEGMENTS = 64  # up to this many segments are matched pairwise, not sorted
+
 __all__ = ["constrained_delaunay", "delaunay"]
 
 
@@ -141,6 +143,10 @@ def segment_flags(segments: np.ndarray) -> np.ndarray:
     flags = np.full(len(S), BOUNDARY, np.uint8)
     if len(S):
         n = int(S.max()) + 1
-        forward = S[:, 0] * n + S[:, 1]
-        flags[np.isin(forward, S[:, 1] * n + S[:, 0])] = INTERIOR
+        forward, backward = S[:, 0] * n + S[:, 1], S[:, 1] * n + S[:, 0]
+        if len(S) <= SMALL_SEGMENTS:  # a patch's few: np.isin's sort costs more
+            reversed_too = (forward[:, None] == backward[None, :]).any(axis=1)
+        else:
+            reversed_too = np.isin(forward, backward)
+        flags[reversed_too] = INTERIOR
     return flags

@@ -326,6 +326,46 @@ def test_radix_argsort_is_numpys_stable_argsort(values, spread):
     assert np.array_equal(_radix_argsort(keys, 2), np.argsort(keys, kind="stable"))
 
 
+@pytest.mark.parametrize("bits", [1, 2, 3, 4, 6])
+def test_hilbert_keys_walk_the_grid_one_cell_at_a_time(bits):
+    """On the full 2**bits square grid the keys are 0 .. 4**bits - 1, each
+    once, and cells of consecutive keys are edge neighbours (the Hilbert
+    curve's defining property), in one thread and in the pool alike."""
+    from bubblemesh._ordering import _hilbert_keys, _hilbert_keys_serial
+
+    side = 2**bits
+    xy = np.array([(x, y) for x in range(side) for y in range(side)], np.float64)
+    for keys in (_hilbert_keys_serial(xy, bits), _hilbert_keys(xy, bits)):
+        assert sorted(keys.tolist()) == list(range(side * side))
+        path = xy[np.argsort(keys)]
+        assert (np.abs(np.diff(path, axis=0)).sum(axis=1) == 1).all()
+
+
+@given(st.lists(st.tuples(st.floats(-1e3, 1e3), st.floats(-1e3, 1e3)), min_size=1,
+                max_size=60))
+def test_the_small_insertion_order_is_the_pools(points):
+    """Below SMALL points the keys come from one thread: the same keys, and
+    the same stable order, as the pool's."""
+    from bubblemesh._ordering import _hilbert_keys, _hilbert_keys_serial, hilbert_order
+
+    P = np.array(points, np.float64)
+    keys = _hilbert_keys(P, 16)
+    assert np.array_equal(_hilbert_keys_serial(P, 16), keys)
+    assert np.array_equal(hilbert_order(P), np.argsort(keys, kind="stable"))
+
+
+@given(st.lists(st.tuples(st.integers(0, 12), st.integers(0, 12)), max_size=150))
+def test_a_segment_is_interior_exactly_when_its_reverse_is_given(pairs):
+    """Segment flags, for a patch's few segments and a domain's many, against
+    a set of the given pairs."""
+    from bubblemesh._cdt import BOUNDARY, INTERIOR
+    from bubblemesh.triangulation import segment_flags
+
+    given_pairs = set(pairs)
+    expected = [INTERIOR if (b, a) in given_pairs else BOUNDARY for a, b in pairs]
+    assert segment_flags(np.array(pairs, np.int64).reshape(-1, 2)).tolist() == expected
+
+
 def _properly_cross(P, s, t):
     """Exact: do segments s and t cross at a point interior to both?"""
     a, b = (tuple(int(c) for c in P[i]) for i in s)
