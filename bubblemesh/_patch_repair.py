@@ -204,7 +204,7 @@ def _removals(T, ptr, idx, crowd, count):
     """Variants removing each of the ``count`` nodes of least ``crowd``
     (finite), ties by index."""
     order = np.lexsort((np.arange(len(crowd)), crowd))[:count]
-    return [(np.unique(T[idx[ptr[v]:ptr[v + 1]]]), [], int(v))
+    return [(_unique(T[idx[ptr[v]:ptr[v + 1]]]), [], int(v))
             for v in order if np.isfinite(crowd[v])]
 
 
@@ -243,7 +243,7 @@ def _edge_keys(edges):
 
 def _patch(ptr, idx, nodes):
     """The triangles touching ``nodes``, sorted."""
-    return np.unique(np.concatenate([idx[ptr[v]:ptr[v + 1]] for v in nodes]))
+    return _unique(np.concatenate([idx[ptr[v]:ptr[v + 1]] for v in nodes]))
 
 
 def _variants(X, T, N_of, t, free, walls):
@@ -372,7 +372,7 @@ def _retriangulate(X, T, patch, added, removed, walls):
     its outline) and keeps every segment inside the patch."""
     sub = T[patch]
     outline = _outline(sub)
-    nodes = np.unique(sub)
+    nodes = _unique(sub)
     if removed >= 0:
         if any(removed in edge for edge in outline):
             return None
@@ -393,7 +393,7 @@ def _retriangulate(X, T, patch, added, removed, walls):
     expected = len(patch) + 2 * len(added) - (2 if removed >= 0 else 0)
     if len(made) != expected or _outline(made) != outline:
         return None
-    if len(added) and not _member(glob[len(nodes):], np.unique(made)).all():
+    if len(added) and not _member(glob[len(nodes):], _unique(made)).all():
         return None
     return made
 
@@ -407,15 +407,15 @@ def _relax(X, T, q, ptr, idx, patch, made, added, free, limit, halvings, steps,
     an area bound breaks or, with ``poor_kept``, more of them (not counting
     the neighbours none of whose nodes moved) are below POOR_RATIO."""
     n = len(X)
-    ring = np.unique(made)
-    outside = _minus(np.unique(np.concatenate([idx[ptr[v]:ptr[v + 1]]
+    ring = _unique(made)
+    outside = _minus(_unique(np.concatenate([idx[ptr[v]:ptr[v + 1]]
                                                for v in ring[ring < n]])), patch)
-    near = np.unique(np.concatenate([ring, T[outside].ravel()]))
+    near = _unique(np.concatenate([ring, T[outside].ravel()]))
     relaxed = near[(near >= n) | free[np.minimum(near, n - 1)]]
-    old = _minus(np.unique(np.concatenate(
+    old = _minus(_unique(np.concatenate(
         [idx[ptr[v]:ptr[v + 1]] for v in relaxed[relaxed < n]] + [outside])), patch)
     sub = np.concatenate([T[old], made])
-    nodes = np.unique(sub)  # the added ones (>= n) last
+    nodes = _unique(sub)  # the added ones (>= n) last
     Xl = np.vstack([X[nodes[nodes < n]], added[nodes[nodes >= n] - n]])
     Tl = np.searchsorted(nodes, sub)
     mov = _member(nodes, relaxed)
@@ -446,6 +446,13 @@ def _relax(X, T, q, ptr, idx, patch, made, added, free, limit, halvings, steps,
         return None
     gain = float(ql.sum()) - float(q[old].sum()) - float(q[patch].sum())
     return low, gain, nodes[mov], Xl[mov]
+
+
+def _unique(a):
+    """The sorted distinct entries of an int array (np.unique without its
+    dispatch, which costs more than the sort for a patch's few nodes)."""
+    a = np.sort(np.asarray(a).ravel())
+    return a[np.concatenate(([True], a[1:] != a[:-1]))] if len(a) else a
 
 
 def _member(a, b):

@@ -880,3 +880,14 @@ def test_a_rescaled_mesh_with_fewer_triangles_below_0_7_is_as_good():
     assert not pipeline._as_good(Ratios(0.69, 0.8), Ratios(0.75, 0.99))
     assert not pipeline._as_good(Ratios(0.8, 0.9), Ratios(0.8, 0.95))
     assert pipeline._as_good(Ratios(0.8, 0.95), Ratios(0.8, 0.95 + 0.5 * pipeline.MEAN_TIE))
+
+
+@given(st.lists(st.integers(-5, 40), max_size=40), st.integers(1, 3))
+def test_a_patchs_distinct_nodes_are_numpys_unique(values, columns):
+    """The repair's unique of a patch's few node numbers: numpy's, for flat
+    and two-dimensional int arrays, empty ones included."""
+    from bubblemesh._patch_repair import _unique
+
+    a = np.array(values[:len(values) // columns * columns], np.int64).reshape(-1, columns)
+    np.testing.assert_array_equal(_unique(a), np.unique(a))
+    np.testing.assert_array_equal(_unique(a.ravel()), np.unique(a))
