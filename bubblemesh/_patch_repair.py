@@ -91,8 +91,9 @@ def repair_worst(X, T, segments, movable, limit, below, rounds, counts, halvings
     failed = set()  # vertex triples none of whose variants paid (nodes keep their numbers)
 
     def pick(X, T, q, ptr, idx, free, limit, walls):
+        skipped = None if held is None else _padded(held, len(X))
         for t in _worst(q, below):
-            if held is not None and _padded(held, len(X))[T[t]].any():
+            if skipped is not None and skipped[T[t]].any():
                 continue
             key = tuple(sorted(T[t].tolist()))
             if key in failed:

@@ -536,8 +536,9 @@ def _as_good(a, b):
     must pay for itself in quality: fitting the field's count is no reason
     to take it."""
     qa, qb = a.quality(), b.quality()
-    if (qa < 0.7).sum() != (qb < 0.7).sum():
-        return bool((qa < 0.7).sum() < (qb < 0.7).sum())
+    poor_a, poor_b = int((qa < 0.7).sum()), int((qb < 0.7).sum())
+    if poor_a != poor_b:
+        return poor_a < poor_b
     return bool(qa.mean() >= qb.mean() - MEAN_TIE)
 
 
