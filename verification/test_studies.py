@@ -325,6 +325,29 @@ def test_a_failing_method_on_the_cluster_is_an_error_row(cases_dir, tmp_path):
                      scheduler="inline").computed >= 1
 
 
+@pytest.mark.slow
+def test_a_study_started_by_an_unguarded_script_says_how_to_fix_it(cases_dir, tmp_path):
+    """A script that runs a study at import, without ``if __name__ ==
+    '__main__':``: each worker process of the local cluster imports it again
+    and cannot start.  The script ends (no hang) with bubblemesh's message
+    naming the guard, not only dask's "Nanny failed to start"."""
+    pytest.importorskip("distributed")
+    script = tmp_path / "unguarded.py"
+    script.write_text(
+        "from bubblemesh.studies import Method, Study, load_cases, run_study\n"
+        f"cases = list(load_cases({str(cases_dir)!r}).values())\n"
+        "study = Study('u', cases, [Method('laplacian', 'laplacian_uniform')], verify=None)\n"
+        f"run_study(study, {str(tmp_path / 'out')!r}, progress=False, workers=1)\n")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get(
+        "PYTHONPATH", "")]))  # fmt: skip
+    done = subprocess.run([sys.executable, str(script)], env=env, capture_output=True,
+                          text=True, timeout=240, cwd=tmp_path)
+    assert done.returncode != 0
+    last = done.stderr.strip().splitlines()[-1]
+    assert last.startswith("RuntimeError: the local dask cluster did not start"), last
+    assert "if __name__ == '__main__':" in last
+
+
 # --------------------------------------------------------------------------- definitions, CLI
 
 

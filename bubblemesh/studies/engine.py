@@ -223,11 +223,17 @@ def _client(address, workers, timeout, say):
         return client, None, f"the dask cluster at {address}"
     import logging
 
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                           resources={TIMING: 1}, host="127.0.0.1", dashboard_address=None,
-                           # no dashboard; its health endpoints on a free loopback port
-                           scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
-                           silence_logs=logging.CRITICAL)  # shutdown races are not errors
+    try:
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                               resources={TIMING: 1}, host="127.0.0.1", dashboard_address=None,
+                               # no dashboard; its health endpoints on a free loopback port
+                               scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                               silence_logs=logging.CRITICAL)  # shutdown races are not errors
+    except Exception as error:  # most often a script that starts a study unguarded
+        raise RuntimeError(
+            f"the local dask cluster did not start ({type(error).__name__}: {error}); each "
+            "worker process imports the main script, so a script that runs a study must do so "
+            "under `if __name__ == '__main__':` (or pass scheduler='inline')") from error
     return Client(cluster), cluster, "a local dask cluster on this machine"
 
 
