@@ -24,6 +24,7 @@ unexpected exception (a bug) shows its traceback instead of one line.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import warnings
 from collections.abc import Sequence
@@ -87,10 +88,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     with warnings.catch_warnings():
         warnings.showwarning = _one_line_warning(prefix)
         try:
-            return args.run(args)
+            status = args.run(args)
+            sys.stdout.flush()  # a reader that left shows here, not at exit
+            return status
         except KeyboardInterrupt:
             _report(prefix, "interrupted")
             return 130
+        except BrokenPipeError:  # the reader of stdout left (`| head`): stop quietly
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return 1
         except Exception as error:
             status = _status(error)
             if status is None and args.debug:
@@ -305,6 +311,8 @@ def _run_info(args: argparse.Namespace) -> int:
 
     try:
         mesh = read(args.input)
+    except BrokenPipeError:
+        raise
     except (OSError, ValueError) as error:
         raise UsageError(f"cannot read the input: {error}") from None
     print(f"nodes: {len(mesh.points)} ({mesh.n_boundary} on the boundary)")
@@ -398,6 +406,8 @@ def _run_check(args: argparse.Namespace) -> int:
 
     try:
         return run_check(args)
+    except BrokenPipeError:
+        raise
     except (OSError, ValueError, TypeError) as error:
         raise UsageError(f"cannot read the input: {error}") from None
 

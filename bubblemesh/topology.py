@@ -32,7 +32,7 @@ def _as_triangles(triangles: np.ndarray, n_points: int) -> np.ndarray:
     T = np.ascontiguousarray(T, dtype=np.int64)
     if T.size and (T.min() < 0 or T.max() >= n_points):
         t = int(np.flatnonzero(((T < 0) | (T >= n_points)).any(axis=1))[0])
-        raise GeometryError(f"triangle {t} = {tuple(T[t])} refers to a node out of range "
+        raise GeometryError(f"triangle {t} = {tuple(T[t].tolist())} refers to a node out of range "
                             f"0..{n_points - 1}")
     return T
 

@@ -306,6 +306,23 @@ def test_the_program_exit_status_and_stderr(poly, tmp_path, args, status, words)
         assert result.stderr.startswith("bubblemesh mesh: error: ") and words in result.stderr
 
 
+@pytest.mark.parametrize("command", ["check", "info"])
+def test_a_reader_that_leaves_early_is_no_error(tmp_path, command):
+    """``bubblemesh check mesh.vtu | head -0``: the reader of stdout has gone
+    before the command writes; the command stops quietly (exit 1, nothing on
+    stderr), neither "cannot read the input: Broken pipe" nor Python's
+    "Exception ignored" at exit."""
+    meshio = pytest.importorskip("meshio")
+    path = tmp_path / "one.vtu"
+    meshio.Mesh(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]), [("triangle", [[0, 1, 2]])]
+                ).write(path)
+    run = subprocess.Popen([sys.executable, "-m", "bubblemesh.cli", command, str(path)],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    run.stdout.close()
+    err = run.stderr.read().decode()
+    assert run.wait(timeout=120) == 1 and err == ""
+
+
 def test_help_documents_the_exit_status(capsys):
     for argv in (["--help"], ["mesh", "--help"]):
         assert main(argv) == 0

@@ -231,6 +231,36 @@ def test_outside_triangle_and_frame():
     assert "outside_domain" in report.summary()
 
 
+@pytest.mark.parametrize("scale", [2.0**-1070, 1e-200, 1e-100, 1.0, 1e100, 1e300])
+def test_the_check_is_the_same_at_every_scale(scale):
+    """The geometry of test_outside_triangle_and_frame, and a square of four
+    right isosceles triangles, times ``scale`` (from subnormal to 1e300,
+    where areas and products of lengths underflow or overflow): the verdicts
+    are those at scale 1, the radius ratios 2(sqrt 2 - 1) and the angles 45
+    and 90 degrees of right isosceles triangles (closed forms), and a missing
+    triangle is still an area violation."""
+    pts = scale * np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0, 0.5], [1, 0.5]])
+    tri = np.array([[0, 1, 5], [0, 5, 4], [4, 5, 2], [4, 2, 3]])
+    report = verify.check(pts, tri, [(0, 1), (1, 5), (5, 4), (4, 0)])
+    assert sorted({v.triangle for v in report.of_kind("outside_domain")}) == [2, 3]
+    square = scale * np.array([[0, 0], [2, 0], [2, 2], [0, 2], [1, 1]])
+    fan = np.array([[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]])
+    report = verify.check(square, fan, [(0, 1), (1, 2), (2, 3), (3, 0)])
+    assert report.ok, report.summary()
+    assert report.quality["min_radius_ratio"] == pytest.approx(2 * (2**0.5 - 1), rel=1e-12)
+    assert report.quality["mean_radius_ratio"] == pytest.approx(2 * (2**0.5 - 1), rel=1e-12)
+    assert report.quality["min_angle"] == pytest.approx(45.0, rel=1e-12)
+    assert report.quality["max_angle"] == pytest.approx(90.0, rel=1e-12)
+    report = verify.check(square, fan[1:], [(0, 1), (1, 2), (2, 3), (3, 0)])
+    assert report.of_kind("area")
+
+
+def test_points_off_the_plane_are_named_with_plain_numbers():
+    pts = np.array([[0, 0, 0], [1, 0, 0.5], [0, 1, 0]], float)
+    with pytest.raises(ValueError, match=r"node 1 has z = 0\.5 \(2-D needs z = 0\)"):
+        verify.check(pts, [[0, 1, 2]])
+
+
 def test_population_criterion_eq6():
     """Equal radii r: every element bubble has radius r (eq. 3), so sum A_e =
     M pi r^2; the criterion holds iff that reaches the domain area 1."""

@@ -10,6 +10,7 @@ allowed).
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 
 import numpy as np
 
@@ -52,7 +53,7 @@ def _adjacency(H: HalfEdges):
 
 def _walk(E: ExactPoints, start, nbrs, A, B, tol):
     """Mesh nodes from A to B along edges whose nodes lie on segment AB, or None."""
-    pts = E.points
+    pts = E.scaled  # times a power of two, so that d @ d neither underflows nor overflows
     d = pts[B] - pts[A]
     L2 = float(d @ d)
     chain, x, t_x = [A], A, 0.0
@@ -170,12 +171,18 @@ def locate_centroids(E: ExactPoints, tri: np.ndarray, domain: Boundary, exact=Fa
 
 
 def check_area(E, tri, domain: Boundary, report, rel):
-    """math.fsum of the triangle areas equals the exact domain area within ``rel``."""
+    """math.fsum of the triangle areas equals the exact domain area within ``rel``,
+    both taken on E's scaled points (a power of two, so the relative error is
+    the same, but no area underflows or overflows); returned at the input's
+    scale, where they may be 0 or inf."""
     from .measures import triangle_areas
 
-    expected = domain.area()
-    total = math.fsum(triangle_areas(E.points, tri).tolist())
+    expected = float(domain.area_exact() * Fraction(1, 1 << (2 * E.shift))
+                     * Fraction(2) ** (-2 * E.exponent))
+    total = math.fsum(triangle_areas(E.scaled, tri).tolist())
     err = abs(total - expected) / abs(expected) if expected else abs(total)
+    with np.errstate(over="ignore"):
+        total, expected = (float(np.ldexp(v, 2 * E.exponent)) for v in (total, expected))
     if not err <= rel:
         report.add("area", f"triangle areas sum to {total!r}, domain area is {expected!r} "
                    f"(rel err {err:.3e} > {rel})")

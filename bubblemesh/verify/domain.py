@@ -16,6 +16,7 @@ Triangle does and tells them apart.
 from __future__ import annotations
 
 import functools
+import math
 from fractions import Fraction
 
 import numpy as np
@@ -243,9 +244,13 @@ class Boundary:
         ``q`` (Q, 2) float positions within ``delta`` of the exact ones;
         ``exact_query(k) -> (X, Y, scale)`` the exact point k as integers in
         the integer scale of ``E`` times ``scale``."""
-        pts = self.E.points
+        # on E's scaled points (times a power of two: no product overflows)
+        pts, k = self.E.scaled, self.E.exponent
         p1, p2 = pts[self.segments[:, 0]], pts[self.segments[:, 1]]
+        q, delta = np.ldexp(q, -k), float(np.ldexp(delta, -k))
         hq, _, uncertain = float_crossings(q, p1, p2, delta)
+        exact = exact or bool(self.E.unsafe.any())  # a scaled node off by its rounding
+        uncertain |= ~np.isfinite(q).all(axis=1)
         odd = np.bincount(hq, minlength=len(q)) % 2 == 1
         out = np.where(odd, 1, -1).astype(np.int64)
         todo = range(len(q)) if exact else np.nonzero(uncertain)[0].tolist()
@@ -318,7 +323,11 @@ class Boundary:
         )
 
     def area(self) -> float:
-        return float(self.area_exact() / (1 << (2 * self.E.shift)))
+        """The domain area as a float (inf past the float range)."""
+        try:
+            return float(self.area_exact() / (1 << (2 * self.E.shift)))
+        except OverflowError:
+            return math.inf
 
     def euler(self) -> int:
         """Euler characteristic of the closed domain (V - E + F of any mesh of

@@ -136,6 +136,7 @@ class ExactPoints:
         self.P, self.shift = exact_integers(self.points)
         mag = float(np.max(np.abs(self.points))) if self.points.size else 0.0
         k = int(np.frexp(mag)[1]) if mag > 0 else 0
+        self.exponent = k  # points == scaled * 2**k
         self.scaled = np.ldexp(self.points, -k)
         self.unsafe = np.any(np.ldexp(self.scaled, k) != self.points, axis=1)
 

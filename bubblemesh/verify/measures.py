@@ -23,17 +23,37 @@ def triangle_areas(points, triangles) -> np.ndarray:
     )
 
 
+def _edge(points, triangles):
+    """edge(i, j): each triangle's vector p_j - p_i, (M, 2), times a power of two
+    per triangle where the triangle's largest such component is below 2^-100
+    or above 2^100 (then brought into [0.5, 1)): the measures below are
+    scale-invariant, but their products of lengths would underflow or overflow
+    there.  Elsewhere no bit changes."""
+    pts = np.asarray(points, dtype=np.float64)
+    tri = np.asarray(triangles, dtype=np.int64)
+    p = [pts[tri[:, k]] for k in range(3)]
+    spans = np.abs(np.hstack([p[1] - p[0], p[2] - p[0], p[1] - p[2]]))
+    largest = spans.max(axis=1) if len(tri) else np.zeros(0)
+    far = (largest > 0) & ((largest < 2.0**-100) | (largest > 2.0**100))
+    shift = np.where(far, -np.frexp(largest)[1], 0)[:, None] if far.any() else None
+
+    def edge(i: int, j: int) -> np.ndarray:
+        d = p[j] - p[i]
+        return d if shift is None else np.ldexp(d, shift)
+
+    return edge
+
+
 def radius_ratio_reference(points, triangles) -> np.ndarray:
     """2r/R from the classical formulas, not from eq. 10:
     inradius r = 2A / perimeter, circumradius R = abc / (4A), A from the cross
     product.  So 2r/R = 16 A^2 / (perimeter * a * b * c).  0 for zero area."""
-    pts = np.asarray(points, dtype=np.float64)
-    tri = np.asarray(triangles, dtype=np.int64)
-    A = np.abs(triangle_areas(pts, tri))
-    p0, p1, p2 = pts[tri[:, 0]], pts[tri[:, 1]], pts[tri[:, 2]]
-    la = np.hypot(*(p1 - p2).T)
-    lb = np.hypot(*(p2 - p0).T)
-    lc = np.hypot(*(p0 - p1).T)
+    edge = _edge(points, triangles)
+    u, w = edge(0, 1), edge(0, 2)
+    A = np.abs(0.5 * (u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0]))
+    la = np.hypot(*edge(2, 1).T)
+    lb = np.hypot(*w.T)
+    lc = np.hypot(*u.T)
     perimeter = la + lb + lc
     with np.errstate(divide="ignore", invalid="ignore"):
         r_in = 2 * A / perimeter
@@ -45,13 +65,10 @@ def radius_ratio_reference(points, triangles) -> np.ndarray:
 def angles_reference(points, triangles) -> np.ndarray:
     """Interior angles in degrees at each triangle vertex, from atan2 of the
     cross and dot products of the two incident edge vectors."""
-    pts = np.asarray(points, dtype=np.float64)
-    tri = np.asarray(triangles, dtype=np.int64)
-    out = np.empty(tri.shape)
+    edge = _edge(points, triangles)
+    out = np.empty((len(np.asarray(triangles)), 3))
     for i in range(3):
-        p = pts[tri[:, i]]
-        u = pts[tri[:, (i + 1) % 3]] - p
-        w = pts[tri[:, (i + 2) % 3]] - p
+        u, w = edge(i, (i + 1) % 3), edge(i, (i + 2) % 3)
         cross = u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0]
         dot = u[:, 0] * w[:, 0] + u[:, 1] * w[:, 1]
         out[:, i] = np.degrees(np.arctan2(np.abs(cross), dot))

@@ -30,7 +30,8 @@ def as_points(points) -> np.ndarray:
     if pts.ndim == 2 and pts.shape[1] == 3:
         if np.any(pts[:, 2] != 0):
             k = int(np.argmax(pts[:, 2] != 0))
-            raise ValueError(f"points are 3-D: node {k} has z = {pts[k, 2]!r} (2-D needs z = 0)")
+            raise ValueError(f"points are 3-D: node {k} has z = {float(pts[k, 2])!r} "
+                             "(2-D needs z = 0)")
         pts = pts[:, :2]
     if pts.ndim != 2 or pts.shape[1] != 2:
         raise ValueError(f"points must have shape (N, 2), got {pts.shape}")
