@@ -325,6 +325,35 @@ def test_a_failing_method_on_the_cluster_is_an_error_row(cases_dir, tmp_path):
                      scheduler="inline").computed >= 1
 
 
+_NATIVE_ABORT_AT_EXIT = """
+import ctypes, sys
+libc = ctypes.CDLL(None)
+libc.__cxa_atexit(ctypes.cast(libc.abort, ctypes.c_void_p), None, None)
+if sys.argv[1] == "leave":
+    from bubblemesh.studies.engine import leave_without_native_destructors
+    leave_without_native_destructors()
+print("done")
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's __cxa_atexit")
+def test_local_workers_skip_native_destructors_at_exit(tmp_path):
+    """A native exit handler that aborts (as Gmsh's destructors have in local
+    workers, with a glibc heap error) kills a plain process at exit (SIGABRT);
+    with leave_without_native_destructors, which _run_dask calls on the
+    workers of the local cluster it starts, the process prints what it had
+    to and exits 0."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get(
+        "PYTHONPATH", "")]))  # fmt: skip
+    script = tmp_path / "native_abort.py"
+    script.write_text(_NATIVE_ABORT_AT_EXIT)
+    runs = {how: subprocess.run([sys.executable, str(script), how], env=env,
+                                capture_output=True, text=True, timeout=120)
+            for how in ("plain", "leave")}
+    assert runs["plain"].returncode == -6 and runs["plain"].stdout == "done\n"
+    assert runs["leave"].returncode == 0 and runs["leave"].stdout == "done\n"
+
+
 @pytest.mark.slow
 def test_a_study_started_by_an_unguarded_script_says_how_to_fix_it(cases_dir, tmp_path):
     """A script that runs a study at import, without ``if __name__ ==

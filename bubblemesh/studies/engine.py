@@ -65,6 +65,26 @@ def warm_up() -> float:
     return time.perf_counter() - t0
 
 
+def leave_without_native_destructors() -> None:
+    """Make this process, a worker of a local cluster started here, end at its
+    exit with its standard streams flushed and ``os._exit(0)``: neither the
+    exit handlers registered before this one (a worker being closed has
+    nothing left to save) nor native libraries' destructors run.  Gmsh's
+    have aborted workers at exit (glibc's "malloc_consolidate(): unaligned
+    fastbin chunk detected"), after all their cells were returned."""
+    import atexit
+
+    def leave() -> None:
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except (OSError, ValueError):  # a closed or gone stream has nothing to say
+                pass
+        os._exit(0)
+
+    atexit.register(leave)
+
+
 def _quiet(message: str) -> None:
     pass
 
@@ -253,6 +273,8 @@ def _run_dask(todo, study, sink, address, workers, progress, say, timeout) -> di
         say(f"{where}: {len(found)} workers, {threads} threads; loading the numba kernels "
             "on each ...")
         client.run(warm_up)
+        if cluster is not None:
+            client.run(leave_without_native_destructors)
         with_resource = all(w.get("resources", {}).get(TIMING, 0) >= 1 for w in found)
         timing = _timing_note(len(found), threads, with_resource)
         futures = {}
