@@ -147,3 +147,28 @@ def test_a_domain_beyond_double_precision_s_range_is_refused_in_one_line():
         warnings.simplefilter("ignore", bm.QualityWarning)
         m = bm.mesh(near)
     O.check_valid(m.points, m.triangles, m.neighbors)
+
+
+@pytest.mark.heavy
+@pytest.mark.parametrize("exponent", [-40, 40])
+def test_meshes_of_a_domain_scaled_by_a_power_of_two_are_scaled_bit_for_bit(exponent):
+    """Scaling a domain and its sizes by 2^k scales every float of the
+    computation exactly, so no absolute tolerance may tell the two apart:
+    bm.mesh (a constant and a graded callable size) and the paper's
+    bm.generate + bm.optimize give the same triangles, and points that are
+    those of the unscaled mesh times 2^k bit for bit."""
+    square = np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float)
+    hole = np.array([(0.3, 0.3), (0.3, 0.6), (0.6, 0.6), (0.6, 0.3)], float)
+
+    def meshes(k):
+        s = 2.0**k
+        domain = bm.Domain.from_loops([square * s, hole * s])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", bm.QualityWarning)
+            return [bm.mesh(domain, size=0.1 * s),
+                    bm.mesh(domain, size=lambda xy: s * (0.04 + 0.2 * np.ldexp(xy[:, 0], -k))),
+                    bm.optimize(bm.generate(domain))]
+
+    for plain, scaled in zip(meshes(0), meshes(exponent), strict=True):
+        assert np.array_equal(plain.triangles, scaled.triangles)
+        assert np.array_equal(np.ldexp(plain.points, exponent), scaled.points)
