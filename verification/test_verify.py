@@ -255,6 +255,15 @@ def test_the_check_is_the_same_at_every_scale(scale):
     assert report.of_kind("area")
 
 
+def test_a_collinear_triangle_is_a_violation_not_an_unreadable_mesh():
+    """One triangle on three collinear nodes, checked against its own boundary
+    edges (which then run back over each other): a report naming the zero
+    area and the overlapping boundary, not an exception."""
+    report = verify.check(np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]]), [[0, 1, 2]])
+    assert not report.ok
+    assert report.of_kind("degenerate") and report.of_kind("non_manifold_vertex")
+
+
 def test_points_off_the_plane_are_named_with_plain_numbers():
     pts = np.array([[0, 0, 0], [1, 0, 0.5], [0, 1, 0]], float)
     with pytest.raises(ValueError, match=r"node 1 has z = 0\.5 \(2-D needs z = 0\)"):
