@@ -77,7 +77,12 @@ def mesh(domain: Domain, *, size: Any = None, max_area: Any = None, gradation: f
             raise ValueError("mesh: size, max_area and gradation do not apply with paper=True "
                              "(the paper's sizes come from the boundary spacing alone)")
         return optimize(generate(domain, progress=progress), progress=progress, **options)
+    import inspect
+
     from .pipeline import robust_mesh
 
+    unknown = sorted(set(options) - set(inspect.signature(robust_mesh).parameters))
+    if unknown:  # named as the caller wrote it, not as robust_mesh
+        raise TypeError(f"mesh() got an unexpected keyword argument {unknown[0]!r}")
     return robust_mesh(domain, size=size, max_area=max_area, gradation=gradation,
                        progress=progress, **options)

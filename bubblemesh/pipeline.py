@@ -275,7 +275,7 @@ def _user_size(size, max_area):
                         f"{type(max_area).__name__}") from None
     if not (math.isfinite(area) and area > 0):
         raise ValueError(f"mesh: max_area must be finite and > 0, got {max_area!r}")
-    side = math.sqrt(4.0 * FILL * area / math.sqrt(3.0))
+    side = math.sqrt(4.0 * FILL * min(area, 1e300) / math.sqrt(3.0))  # no overflow to inf
     if size is None:
         return side
     if callable(size):

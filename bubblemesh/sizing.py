@@ -52,6 +52,7 @@ FEATURE_SLACK = 1.25  # on the boundary h <= FEATURE_SLACK * feature size
 FEATURE_FLOOR = 1e-4
 QUADTREE_SAMPLING = 0.7  # quadtree cells have sides <= QUADTREE_SAMPLING * user size
 MAX_SOURCES = 2**24  # beyond this the requested sizes are unreasonably small
+CAP_REACH = 2.0**20  # a size cap beyond this many times the domain's extent is held at it
 _LEAF = 8  # items per tree leaf
 _STACK = 256  # > twice the depth of any tree over < 2**60 items
 _HINT = _STACK  # the stack's last entry: the source of the previous answer, a warm start
@@ -432,7 +433,7 @@ def as_size_function(size, name: str = "size") -> Callable[[np.ndarray], np.ndar
                 k = int(np.argmax(bad))
                 raise ValueError(
                     f"{name}(xy) must be finite and > 0; at {tuple(xy[k].tolist())} "
-                    f"it is {values[k]!r}"
+                    f"it is {float(values[k])!r}"
                 )
             return values
 
@@ -547,6 +548,7 @@ class SizeField:
             raise TypeError(f"expected a Domain, got {type(domain).__name__}")
         g = _gradation(gradation)
         cap = math.inf if size is None or callable(size) else _positive_number(size, "size")
+        cap = min(cap, CAP_REACH * float(np.ptp(domain.points, axis=0).max()))
         user = None if size is None else as_size_function(size)
         boundary = _Boundary(domain)
         points, values = _node_sources(domain, boundary, user, cap)

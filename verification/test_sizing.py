@@ -243,7 +243,7 @@ def test_bad_user_sizes_and_gradations():
         (-1.0, ValueError, "size must be finite and > 0"),
         (math.nan, ValueError, "size must be finite and > 0"),
         ("big", TypeError, "size must be a positive number or a callable"),
-        (lambda xy: np.zeros(len(xy)), ValueError, "finite and > 0; at"),
+        (lambda xy: np.zeros(len(xy)), ValueError, r"> 0; at \(0\.0, 0\.0\) it is 0\.0$"),
         (lambda xy: np.ones((len(xy), 2)), ValueError, "must return shape"),
         (lambda xy: np.full(len(xy), np.inf), ValueError, "finite and > 0"),
         (lambda xy: ["a"] * len(xy), ValueError, "did not return numbers"),
@@ -256,6 +256,27 @@ def test_bad_user_sizes_and_gradations():
         SizeField.from_domain([np.zeros((3, 2))])
     with pytest.raises(bm.MeshingError, match="boundary samples"):
         SizeField.from_domain(domain, size=lambda xy: np.full(len(xy), 1e-9), max_sources=1000)
+
+
+def test_sizes_far_beyond_the_domain_give_its_coarsest_mesh():
+    """A unit square meshed with size 1e300, 1.7e308, max_area 1e308 (whose
+    squares overflow) or a callable of 1e300: the same mesh as with size 10,
+    ten times its diagonal, i.e. its two triangles on its four corners (no
+    node added, nothing refused)."""
+    domain = bm.Domain.from_loops([np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float)])
+    coarse = bm.mesh(domain, size=10.0)
+    assert len(coarse.triangles) == 2 and len(coarse.points) == 4
+    for options in (dict(size=1e300), dict(size=1.7e308), dict(max_area=1e308),
+                    dict(size=lambda xy: np.full(len(xy), 1e300))):
+        m = bm.mesh(domain, **options)
+        assert np.array_equal(m.points, coarse.points), options
+        assert np.array_equal(m.triangles, coarse.triangles), options
+
+
+def test_an_unknown_option_is_named_as_the_caller_wrote_it():
+    domain = bm.Domain.from_loops([np.array([(0, 0), (1, 0), (0, 1)], float)])
+    with pytest.raises(TypeError, match=r"^mesh\(\) got an unexpected keyword argument 'bogus'$"):
+        bm.mesh(domain, size=0.5, bogus=1)
 
 
 @given(source_sets(), st.floats(0.05, 0.9))
