@@ -615,7 +615,7 @@ def _as_loop_list(loops) -> list:
         raise GeometryError(
             "from_loops takes a sequence of loops; wrap a single outer loop as [loop]"
         )
-    if isinstance(loops, (str, bytes)) or not isinstance(loops, Iterable):
+    if isinstance(loops, (str, bytes, dict)) or not isinstance(loops, Iterable):
         raise TypeError(
             "from_loops takes a sequence of loops (outer first, then holes), "
             f"got {type(loops).__name__}"
