@@ -317,7 +317,7 @@ def test_big_int_in_the_outer_loop_is_a_geometry_error_not_an_overflow():
     )
 
 
-@pytest.mark.parametrize("loops", [None, 3.5, "loops", b"loops"])
+@pytest.mark.parametrize("loops", [None, 3.5, "loops", b"loops", {"outer": [(0, 0), (1, 0)]}])
 def test_loops_that_are_no_sequence_are_a_type_error(loops):
     with pytest.raises(TypeError, match="from_loops takes a sequence of loops"):
         Domain.from_loops(loops)
