@@ -186,6 +186,7 @@ COUNT_TOL = 0.05  # a count this close to the size field's fits it
 COUNT_AIM = 0.04  # a mesh further over it is made again on a steeper gradation
 STEEPER_BELOW = 200_000  # up to this many elements
 STEEPER_MAX, STEEPER_STEPS = 4.0, 12  # the gradation searched up to this factor, in steps
+STEEPER_TOL = 1e-3  # ... until the log of its count over the goal's is this close below 0
 MEAN_TIE = 1e-4  # means closer than this are a tie, broken by the minimum
 MIN_ENOUGH = 0.9  # a mesh whose minimum stays above this is ranked by its mean
 MIN_TRADE, MIN_TRADE_MAX = 1.5, 0.005  # a mean gain may cost the minimum this times it (at most)
@@ -547,7 +548,7 @@ def _steeper_gradation(domain, size, max_area, field, mesh):
     COUNT_AIM over the count ``field`` asks for (graded walls fill with more
     elements than the field's integral, the more the steeper they grade):
     the one whose field asks for that count shrunk by the same share, found
-    by bisection, or None (no gradation, a mesh above STEEPER_BELOW
+    by regula falsi (:func:`_falsi`), or None (no gradation, a mesh above STEEPER_BELOW
     elements, or one within COUNT_AIM)."""
     count, g = len(mesh.triangles), field.gradation
     if g <= 0.0 or count > STEEPER_BELOW:
@@ -561,12 +562,34 @@ def _steeper_gradation(domain, size, max_area, field, mesh):
         steeper = _with_wedges(domain, _plain_field(domain, size, max_area, gradation))
         return field_count(steeper, mesh.points, mesh.triangles)
 
-    low, high = g, STEEPER_MAX * g
-    if asks(high) > goal:
+    high = STEEPER_MAX * g
+    over_high = math.log(asks(high) / goal)
+    if over_high > 0.0:
         return high
+    return _falsi(lambda x: math.log(asks(x) / goal), g, high, math.log(asked / goal),
+                  over_high)
+
+
+def _falsi(f, low, high, f_low, f_high):
+    """The root of a decreasing ``f`` with f(low) = f_low > 0 >= f_high = f(high),
+    by regula falsi with the Illinois rule (an end kept twice has its value
+    halved, so both ends move): the high end once its value is within
+    STEEPER_TOL below zero, or after STEEPER_STEPS evaluations."""
+    kept = 0  # +1: the low end was kept last time, -1: the high end
     for _ in range(STEEPER_STEPS):
-        middle = 0.5 * (low + high)
-        low, high = (middle, high) if asks(middle) > goal else (low, middle)
+        if f_high >= -STEEPER_TOL:
+            break
+        margin = 1e-3 * (high - low)
+        x = min(max(high - f_high * (high - low) / (f_high - f_low), low + margin), high - margin)
+        f_x = f(x)
+        if f_x > 0.0:
+            low, f_low = x, f_x
+            f_high *= 0.5 if kept < 0 else 1.0
+            kept = -1
+        else:
+            high, f_high = x, f_x
+            f_low *= 0.5 if kept > 0 else 1.0
+            kept = 1
     return high
 
 

@@ -639,8 +639,8 @@ def test_a_field_graded_off_fine_holes_gets_its_count(monkeypatch):
 def test_the_steeper_gradation_asks_for_the_count_shrunk_by_the_excess():
     """_steeper_gradation on a §2 mesh made for a size 15% finer than its field's:
     the field at the gradation it returns asks (the midpoint count on that
-    mesh) for the field's count shrunk by the mesh's excess, to the
-    bisection's step; nothing for a mesh within COUNT_AIM of its field or
+    mesh) for the field's count shrunk by the mesh's excess, within
+    STEEPER_TOL; nothing for a mesh within COUNT_AIM of its field or
     for a field without a gradation."""
     from bubblemesh.sizing import field_count
 
@@ -654,10 +654,33 @@ def test_the_steeper_gradation_asks_for_the_count_shrunk_by_the_excess():
     assert g is not None and field.gradation < g < pipeline.STEEPER_MAX * field.gradation
     steeper = SizeField.from_domain(domain, size=0.06, gradation=g)
     goal = asked * asked / len(m.triangles)
-    assert abs(field_count(steeper, m.points, m.triangles) / goal - 1) < 1e-3
+    asks = field_count(steeper, m.points, m.triangles)
+    assert -pipeline.STEEPER_TOL <= math.log(asks / goal) <= 0.0
     assert pipeline._steeper_gradation(domain, 0.06 / 1.15, None, finer, m) is None
     flat = SizeField.from_domain(domain, size=0.06, gradation=0.0)
     assert pipeline._steeper_gradation(domain, 0.06, None, flat, m) is None
+
+
+@pytest.mark.parametrize("power", [0.5, 2.0, 8.0])
+def test_regula_falsi_ends_just_past_the_root_in_few_evaluations(power, monkeypatch):
+    """_falsi on f(x) = p log(c / x), decreasing with its root at x = c (known
+    in closed form): the end it returns lies at or past the root, with f
+    there within STEEPER_TOL of zero, in at most 6 evaluations on the bracket
+    [1, 4] (bisection needs 12 for that bracket's 3/4096); with a budget of
+    one evaluation it still returns an end that is not short of the root."""
+    root, evaluated = 2.7, []
+
+    def f(x):
+        evaluated.append(x)
+        return power * (math.log(root) - math.log(x))
+
+    ends = f(1.0), f(4.0)
+    evaluated.clear()
+    x = pipeline._falsi(f, 1.0, 4.0, *ends)
+    assert len(evaluated) <= 6
+    assert x >= root and -pipeline.STEEPER_TOL <= f(x) <= 0.0
+    monkeypatch.setattr(pipeline, "STEEPER_STEPS", 1)
+    assert pipeline._falsi(f, 1.0, 4.0, *ends) >= root
 
 
 def _finely_walled_rectangle(spacing):
