@@ -322,6 +322,9 @@ def write_poly(
 _FORMAT_BY_SUFFIX = {".msh": "gmsh22", ".xdmf": "xdmf", ".xmf": "xdmf"}
 # formats meshio knows but that keep no triangles (it skips them with a warning)
 _NO_TRIANGLES = {"tetgen": "tetrahedra", "flac3d": "3-D cells"}
+_NO_LINES = {"xdmf", "obj", "stl", "off", "ply", "wkt", "tecplot", "avsucd", "hmf",
+             "dolfin-xml"}  # written with the triangles alone: meshio cannot read lines back
+_NO_CELL_DATA = {"dolfin-xml"}  # meshio writes numpy 2 scalars there as "np.float64(1.0)"
 
 
 def _meshio():
@@ -426,13 +429,16 @@ def check_mesh_path(path: str | Path, file_format: str | None = None) -> str:
     with tempfile.TemporaryDirectory() as scratch:
         try:
             with contextlib.redirect_stderr(text_io.StringIO()):  # meshio's own warnings
-                write_mesh(
+                write_mesh(  # as Mesh.write does: data, marked boundary lines, a region
                     Path(scratch) / path.name,
                     np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]),
                     np.array([[0, 1, 2]]),
                     point_data={"real": np.zeros(3), "flag": np.zeros(3, dtype=np.int64)},
                     cell_data={"quality": np.ones(1)},
                     file_format=file_format,
+                    lines=(np.array([[0, 1], [1, 2], [2, 0]]), np.array([1, 1, 2])),
+                    regions=np.ones(1, np.int64),
+                    names={"wall": 1},
                 )
         except Exception as error:  # any failure of meshio's writer: say it now
             cause = (error.__cause__ if isinstance(error, MeshFileError) else None) or error
@@ -463,7 +469,9 @@ def write_mesh(
     data on lines), ``regions`` the triangles' tags (default 1) and ``names``
     the marker names as physical names.  XDMF keeps the triangles only (one
     cell type per file, as dolfinx reads it; ``bubblemesh.interop.write_xdmf``
-    writes the facets beside it).
+    writes the facets beside it), and so do the formats that hold no line
+    cells or whose lines meshio cannot read back (OBJ, STL, OFF, PLY, WKT,
+    Tecplot, AVS-UCD, HMF, DOLFIN XML; the last without cell data).
 
     ``file_format="gmsh"`` writes binary Gmsh 4.1 with every cell datum on
     every block (lines get NaN, or 0 for integer data): one surface entity per
@@ -484,7 +492,8 @@ def write_mesh(
     points = np.asarray(points, dtype=np.float64)
     triangles = np.asarray(triangles, dtype=np.int64)
     points3 = np.column_stack([points, np.zeros(len(points))])
-    cells = {name: [np.asarray(values)] for name, values in (cell_data or {}).items()}
+    cells = {name: [np.asarray(values)] for name, values in (cell_data or {}).items()
+             if file_format not in _NO_CELL_DATA}
     blocks = [("triangle", triangles)]
     tags = np.ones(len(triangles), np.int32) if regions is None else np.asarray(regions, np.int32)
     if file_format == "gmsh22":
@@ -499,7 +508,7 @@ def write_mesh(
         blocks, cells, point_data["gmsh:dim_tags"] = _gmsh41_entities(
             len(points), triangles, tags, edges, marks, cells)
         field_data = {name: np.array([marker, 1]) for name, marker in (names or {}).items()}
-    elif lines is not None and len(lines[0]) and file_format != "xdmf":
+    elif lines is not None and len(lines[0]) and file_format not in _NO_LINES:
         edges, marks = np.asarray(lines[0], np.int64), np.asarray(lines[1], np.int32)
         blocks.append(("line", edges))
         if file_format == "gmsh22":  # meshio's Gmsh 2.2 reader splits other element data wrongly
@@ -523,3 +532,6 @@ def write_mesh(
         meshio.write(path, mesh, file_format=file_format, **{**options, **meshio_kwargs})
     except (meshio.WriteError, ImportError) as error:  # unknown format, missing optional package
         raise MeshFileError(f"{path}: meshio cannot write {file_format!r}: {error}") from error
+    except (TypeError, ValueError, AttributeError, KeyError, IndexError) as error:
+        raise MeshFileError(f"{path}: meshio's {file_format!r} writer failed on this mesh: "
+                            f"{type(error).__name__}: {error}") from error
