@@ -548,7 +548,8 @@ class SizeField:
             raise TypeError(f"expected a Domain, got {type(domain).__name__}")
         g = _gradation(gradation)
         cap = math.inf if size is None or callable(size) else _positive_number(size, "size")
-        cap = min(cap, CAP_REACH * float(np.ptp(domain.points, axis=0).max()))
+        if math.isfinite(cap):  # no size (cap inf) is not a size far beyond the domain
+            cap = min(cap, CAP_REACH * float(np.ptp(domain.points, axis=0).max()))
         user = None if size is None else as_size_function(size)
         boundary = _Boundary(domain)
         points, values = _node_sources(domain, boundary, user, cap)

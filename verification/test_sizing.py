@@ -273,6 +273,19 @@ def test_sizes_far_beyond_the_domain_give_its_coarsest_mesh():
         assert np.array_equal(m.triangles, coarse.triangles), options
 
 
+def test_no_size_is_no_cap_and_a_huge_size_is_held_at_the_domains_reach():
+    """Without a size, or with a callable one, the field has no cap (the
+    mesher's capped paths, lattice and frontal insertion, stay off); a
+    number far beyond the domain is held at CAP_REACH times its extent."""
+    from bubblemesh.sizing import CAP_REACH
+
+    domain = bm.Domain.from_loops([np.array([(0, 0), (3, 0), (3, 1), (0, 1)], float)])
+    assert SizeField.from_domain(domain).cap == math.inf
+    assert SizeField.from_domain(domain, size=lambda xy: np.full(len(xy), 1e300)).cap == math.inf
+    assert SizeField.from_domain(domain, size=0.5).cap == 0.5
+    assert SizeField.from_domain(domain, size=1e300).cap == CAP_REACH * 3.0
+
+
 def test_an_unknown_option_is_named_as_the_caller_wrote_it():
     domain = bm.Domain.from_loops([np.array([(0, 0), (1, 0), (0, 1)], float)])
     with pytest.raises(TypeError, match=r"^mesh\(\) got an unexpected keyword argument 'bogus'$"):
