@@ -290,9 +290,11 @@ def _progressions(a, b, node_a, node_b, theta, size, below, free, ladder_walls):
 def _graded(theta, size, below, node, far, corner, away, ladder, clearance):
     """The rest of :class:`_Walls` for the wall ends of :func:`_progressions`
     (``away`` from the corner along the wall), with the ``ladder`` mask, and
-    per wall end whether its first node not kept is short of the wall's far
-    end (or past the middle of a wall graded from both ends) and of the
-    clearance."""
+    per wall end whether it ends open: its first node not kept short of the
+    clearance, with room for a piece past it on the wall (or past the middle
+    of a wall graded from both ends), or, for a ladder of at least two
+    layers, on the wall where the wedge is wider than LADDER_WIDTH times the
+    size."""
     length = np.hypot(away[:, 0], away[:, 1])
     # a wall graded from both ends is shared at its middle; else the progression may run
     # on while its next node still lies on the wall
@@ -331,8 +333,13 @@ def _graded(theta, size, below, node, far, corner, away, ladder, clearance):
     # closed: the next node would pass a wall's far end (not the middle of a wall the
     # other corner grades too) or the clearance
     middle = shared[:, None] & (u > 0.5)
-    closed = ~middle & ((u * q[:, None] > 1.0) | (dist >= clearance[:, None]))
+    beyond = dist >= clearance[:, None]
+    closed = ~middle & ((u * q[:, None] > 1.0) | beyond)
     open_end = (count == MAX_PER_WALL) | ~np.take_along_axis(closed, after, axis=1)[:, 0]
+    # a ladder of two layers or more whose first node not kept lies on its wall where
+    # the wedge is wide stops where the wedge widens, though its wall ends a layer later
+    widened = ~middle & ((u > 1.0) | (wide <= h) | beyond)
+    open_end |= ladder & (count >= 3) & ~np.take_along_axis(widened, after, axis=1)[:, 0]
     return ladder, q, u, fits, where, dist, (q[:, None] - 1.0) * dist, open_end
 
 

@@ -228,6 +228,22 @@ def test_a_ladder_corner_has_an_isosceles_triangle_and_nodes_on_its_bisector(deg
     assert _off_corner_minimum(mesh)[1] >= 0.7
 
 
+@pytest.mark.parametrize("length", [0.45, 0.5, 0.6])
+def test_a_ladder_on_short_walls_ends_where_the_wedge_widens(length):
+    """A kite's 26.5-degree corner with walls 4.5-6 sizes long: the ladder
+    stops where the wedge widens, and the walls end a layer further on.  It
+    is a ladder all the same (rungs on the bisector, an isosceles corner
+    triangle), so no triangle is below 0.7 (the zigzag's corner triangle
+    is 0.59 at this angle)."""
+    theta = math.radians(26.5)
+    domain = bm.Domain.from_loops(_kite(theta, length))
+    assert len(ladder_points(domain, lambda p: np.full(len(p), 0.1), GRADE_ANGLE)) >= 1
+    mesh = bm.mesh(domain, size=0.1)
+    check_valid(mesh.points, mesh.triangles, mesh.neighbors)
+    assert len(_ladder_nodes(mesh)) >= 1
+    assert _off_corner_minimum(mesh)[1] >= 0.7
+
+
 @pytest.mark.parametrize("obstacle", ["point", "hole"])
 def test_a_ladder_that_would_reach_what_lies_in_its_wedge_is_a_zigzag(obstacle):
     # a free point or a small hole on the bisector of a 30-degree corner, 0.3
