@@ -173,6 +173,7 @@ SWAP_GAIN = 1e-5  # each kept only if the mesh mean rises by more than this
 PRUNE_ROUNDS = 32  # free nodes removed at most, each for a rise of the mean over SWAP_GAIN
 PRUNE_WINDOW = 0.03  # while the count stays within this share under the field's
 PRUNE_SHARE = 0.01  # and within this share under its own: the ranking chose the mesh at it
+WIDE_GAIN, WIDE_WINDOW, WIDE_SHARE = 1e-3, 0.04, 0.02  # then for this gain each, this far
 FINE_WALL = 0.8  # the balance takes nodes last from the first row of walls finer than this
 BOTH_BELOW, BOTH_COUNT = 5000, 0.03  # both insertions up to this many elements (auto)
 NEITHER_COUNT, NEITHER_GAIN = 0.1, 0.5  # no count fits: a mean gain may buy a few elements
@@ -1350,30 +1351,41 @@ def _pruned(mesh, max_area, field):
     (:func:`~bubblemesh._patch_repair.prune_nodes`: of the nodes whose stars
     have the lowest mean, the removal leaving the highest mesh mean, no
     changed triangle below the mesh's minimum or POOR_RATIO, the area bounds
-    kept); PRUNE_ROUNDS at most.  It pays most where input points are fixed
-    inside the domain: §2 fills the gaps between them with nodes the field
-    asks for but the points leave no good place for (three or six triangles
-    near 0.78 around a node in one triangle of an otherwise regular set).
-    The share keeps the count near the one the ranking chose the mesh at: a
-    mesh under 200 elements loses no node."""
+    kept); PRUNE_ROUNDS at most.  Then, for a clear gain only (each removal
+    raising the mean by over WIDE_GAIN), on within WIDE_WINDOW and WIDE_SHARE:
+    a removal that tidies a whole end of a strip is worth a count further
+    from the field's, within its target.  It pays most where input points
+    are fixed inside the domain: §2 fills the gaps between them with nodes
+    the field asks for but the points leave no good place for (three or six
+    triangles near 0.78 around a node in one triangle of an otherwise
+    regular set).  The share keeps the count near the one the ranking chose
+    the mesh at: a mesh under 200 elements loses no node for a small gain."""
     X, T = mesh.points, mesh.triangles
     if not PRUNE_ROUNDS or len(T) > BALANCE_BELOW:
         return mesh
     segments = np.asarray(mesh.segments)
+    regions = getattr(mesh.domain, "regions", None)
+    asked, count = field_count(field, X, T), len(T)
     movable = np.arange(len(X)) >= mesh.n_boundary
     movable[np.unique(segments)] = False
-    limit = triangle_limits(X, T, mesh.neighbors, getattr(mesh.domain, "regions", None),
-                            max_area) / (1.0 + AREA_MARGIN)
-    least = max(field_count(field, X, T) * (1.0 - PRUNE_WINDOW), len(T) * (1.0 - PRUNE_SHARE))
-    Y, U, old, taken = prune_nodes(X, T, segments, movable, limit, least, PRUNE_ROUNDS,
-                                   MEAN_HALVINGS, MEAN_STEPS, SWAP_GAIN, POOR_RATIO)
+    kept, N, taken = np.arange(len(X)), mesh.neighbors, 0
+    for window, share, gain in ((PRUNE_WINDOW, PRUNE_SHARE, SWAP_GAIN),
+                                (WIDE_WINDOW, WIDE_SHARE, WIDE_GAIN)):
+        limit = triangle_limits(X, T, N, regions, max_area) / (1.0 + AREA_MARGIN)
+        least = max(asked * (1.0 - window), count * (1.0 - share))
+        X, T, old, took = prune_nodes(X, T, segments, movable, limit, least, PRUNE_ROUNDS,
+                                      MEAN_HALVINGS, MEAN_STEPS, gain, POOR_RATIO)
+        if took:
+            kept, movable, taken = kept[old], movable[old], taken + took
+            N = _walled(T, neighbors_of(T), segments, len(X))
+        if len(T) - 2 >= least and took < PRUNE_ROUNDS:
+            break  # no removal paid even the small gain: none pays the clear one
     if not taken:
         return mesh
     stats = replace(mesh.optimization, repairs=mesh.optimization.repairs + taken,
-                    min_ratio=_smallest_ratio(Y, U))
-    N = _walled(U, neighbors_of(U), segments, len(Y))
-    return replace(mesh, points=Y, triangles=U, neighbors=N, radii=np.asarray(mesh.radii)[old],
-                   optimization=stats)
+                    min_ratio=_smallest_ratio(X, T))
+    return replace(mesh, points=X, triangles=T, neighbors=N,
+                   radii=np.asarray(mesh.radii)[kept], optimization=stats)
 
 
 def _fine_walls_first_row(X, T, segments, field):
