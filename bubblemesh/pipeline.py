@@ -1351,15 +1351,16 @@ def _pruned(mesh, max_area, field):
     (:func:`~bubblemesh._patch_repair.prune_nodes`: of the nodes whose stars
     have the lowest mean, the removal leaving the highest mesh mean, no
     changed triangle below the mesh's minimum or POOR_RATIO, the area bounds
-    kept); PRUNE_ROUNDS at most.  Then, for a clear gain only (each removal
-    raising the mean by over WIDE_GAIN), on within WIDE_WINDOW and WIDE_SHARE:
-    a removal that tidies a whole end of a strip is worth a count further
-    from the field's, within its target.  It pays most where input points
+    kept); PRUNE_ROUNDS at most.  The removals pay most where input points
     are fixed inside the domain: §2 fills the gaps between them with nodes
     the field asks for but the points leave no good place for (three or six
     triangles near 0.78 around a node in one triangle of an otherwise
     regular set).  The share keeps the count near the one the ranking chose
-    the mesh at: a mesh under 200 elements loses no node for a small gain."""
+    the mesh at: a mesh under 200 elements loses no node for a small gain.
+    Where that floor stopped them, removals of a clear gain (over WIDE_GAIN
+    each) go on down to WIDE_WINDOW under the field's count and WIDE_SHARE
+    under the mesh's: one node too many at the end of a strip is worth a
+    count a little further from the field's, still within its target."""
     X, T = mesh.points, mesh.triangles
     if not PRUNE_ROUNDS or len(T) > BALANCE_BELOW:
         return mesh

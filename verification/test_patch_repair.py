@@ -783,10 +783,10 @@ def test_removals_that_pay_mend_nodes_set_between_fixed_points():
 @pytest.mark.heavy
 def test_a_removal_of_clear_gain_may_go_further_from_the_count():
     """A parallelogram strip with 45-degree ends (the narrow family's 6.14):
-    one node more than the rows need sits at the end with the acute corner,
-    and its removal takes the count 1.6% under the mesh's own (past
-    PRUNE_SHARE) but raises the mean by over WIDE_GAIN: the second stage
-    takes it, within WIDE_WINDOW and WIDE_SHARE (:func:`_check_pruned`)."""
+    one node more than the rows need sits at one end, and its removal takes
+    the count 1.6% under the mesh's own (past PRUNE_SHARE) but raises the
+    mean by over WIDE_GAIN: the second stage takes it, within WIDE_WINDOW
+    and WIDE_SHARE (:func:`_check_pruned`)."""
     from bubblemesh.studies.families import FAMILIES
 
     *_, (name, domain, options) = FAMILIES["narrow"](15, 6)
