@@ -134,7 +134,7 @@ from .errors import GeometryError, MeshingError
 from .generation import generate_sized, refuse_beyond_memory
 from .quality import radius_ratio
 from .refinement import refine_boundary
-from .sizing import _EQUILATERAL_RADIUS, SizeField, as_size_function, field_count
+from .sizing import _EQUILATERAL_RADIUS, SizeField, _float, as_size_function, field_count
 from .timing import PhaseClock
 from .topology import neighbors_of
 from .triangulation import constrained_delaunay
@@ -270,11 +270,7 @@ def _user_size(size, max_area):
     nearly every triangle below the bound; the bound pass splits the rest)."""
     if max_area is None:
         return size
-    try:
-        area = float(max_area)
-    except (TypeError, ValueError):
-        raise TypeError(f"mesh: max_area must be a positive number, got "
-                        f"{type(max_area).__name__}") from None
+    area = _float(max_area, "mesh: max_area", "a positive number")
     if not (math.isfinite(area) and area > 0):
         raise ValueError(f"mesh: max_area must be finite and > 0, got {max_area!r}")
     side = math.sqrt(4.0 * FILL * min(area, 1e300) / math.sqrt(3.0))  # no overflow to inf

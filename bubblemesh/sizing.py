@@ -442,13 +442,19 @@ def as_size_function(size, name: str = "size") -> Callable[[np.ndarray], np.ndar
     return lambda xy: np.full(len(xy), value)
 
 
-def _positive_number(value, name: str) -> float:
+def _float(value, name: str, expected: str) -> float:
+    """``value`` as a float, or a TypeError naming ``name``: text and booleans are
+    refused, though float() would take "0.1" and True."""
     try:
-        number = float(value)
+        if isinstance(value, (str, bytes, bool, np.bool_)):
+            raise TypeError
+        return float(value)
     except (TypeError, ValueError):
-        raise TypeError(
-            f"{name} must be a positive number or a callable, got {type(value).__name__}"
-        ) from None
+        raise TypeError(f"{name} must be {expected}, got {type(value).__name__}") from None
+
+
+def _positive_number(value, name: str) -> float:
+    number = _float(value, name, "a positive number or a callable")
     if not (math.isfinite(number) and number > 0):
         raise ValueError(f"{name} must be finite and > 0, got {value!r}")
     return number
@@ -564,10 +570,7 @@ class SizeField:
 
 
 def _gradation(g) -> float:
-    try:
-        g = float(g)
-    except (TypeError, ValueError):
-        raise TypeError(f"gradation must be a number, got {type(g).__name__}") from None
+    g = _float(g, "gradation", "a number")
     if not (math.isfinite(g) and g >= 0):
         raise ValueError(f"gradation must be finite and >= 0, got {g!r}")
     return g

@@ -243,6 +243,8 @@ def test_bad_user_sizes_and_gradations():
         (-1.0, ValueError, "size must be finite and > 0"),
         (math.nan, ValueError, "size must be finite and > 0"),
         ("big", TypeError, "size must be a positive number or a callable"),
+        ("0.1", TypeError, "size must be a positive number or a callable, got str"),
+        (True, TypeError, "size must be a positive number or a callable, got bool"),
         (lambda xy: np.zeros(len(xy)), ValueError, r"> 0; at \(0\.0, 0\.0\) it is 0\.0$"),
         (lambda xy: np.ones((len(xy), 2)), ValueError, "must return shape"),
         (lambda xy: np.full(len(xy), np.inf), ValueError, "finite and > 0"),
@@ -252,6 +254,11 @@ def test_bad_user_sizes_and_gradations():
             SizeField.from_domain(domain, size=size)
     with pytest.raises(ValueError, match="gradation must be finite and >= 0"):
         SizeField.from_domain(domain, gradation=-0.1)
+    with pytest.raises(TypeError, match="gradation must be a number, got str"):
+        SizeField.from_domain(domain, gradation="0.3")
+    for area in ("0.1", True):  # float() would take both
+        with pytest.raises(TypeError, match="max_area must be a positive number, got "):
+            bm.mesh(domain, max_area=area)
     with pytest.raises(TypeError, match="expected a Domain"):
         SizeField.from_domain([np.zeros((3, 2))])
     with pytest.raises(bm.MeshingError, match="boundary samples"):
