@@ -11,6 +11,7 @@ from typing import Any
 
 from . import threads  # noqa: F401  (first: configures the thread pool before any kernel runs)
 from ._mesh import GenerationStats, Mesh, OptimizationStats, read
+from .compiling import maybe_notice
 from .domain import Domain
 from .errors import GeometryError, MeshingError
 from .generation import generate
@@ -84,5 +85,6 @@ def mesh(domain: Domain, *, size: Any = None, max_area: Any = None, gradation: f
     unknown = sorted(set(options) - set(inspect.signature(robust_mesh).parameters))
     if unknown:  # named as the caller wrote it, not as robust_mesh
         raise TypeError(f"mesh() got an unexpected keyword argument {unknown[0]!r}")
-    return robust_mesh(domain, size=size, max_area=max_area, gradation=gradation,
-                       progress=progress, **options)
+    with maybe_notice(progress):
+        return robust_mesh(domain, size=size, max_area=max_area, gradation=gradation,
+                           progress=progress, **options)

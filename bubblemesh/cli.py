@@ -14,6 +14,8 @@ with other meshers, ``bubblemesh study`` runs any study definition (both on
 dask), ``bubblemesh bench`` times them; they live in ``bubblemesh.studies``,
 imported only when asked for.
 
+The first run after an install compiles the numba kernels (a minute or two)
+and says so in one line on stderr; ``mesh --progress`` shows progress bars.
 Every error is reported as one line on stderr, ``bubblemesh COMMAND: error:
 ...``, and the exit status says which kind it was (``EXIT_STATUS`` below, also
 in ``--help``).  The output paths of ``mesh`` are checked before meshing
@@ -31,6 +33,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import NoReturn
 
+from bubblemesh.compiling import compile_notice
 from bubblemesh.errors import MeshingError
 
 __all__ = ["EXIT_STATUS", "main"]
@@ -177,6 +180,7 @@ def _parser() -> argparse.ArgumentParser:
     mesh.add_argument(
         "--max-insertions", type=_whole(0), metavar="K", help="stop generation after K insertions"
     )
+    mesh.add_argument("--progress", action="store_true", help="show progress bars on stderr")
     mesh.set_defaults(run=_run_mesh)
 
     reproduce = command("reproduce", "rebuild the paper's cases and the report")
@@ -273,12 +277,14 @@ def _run_mesh(args: argparse.Namespace) -> int:
     if paper and (args.size is not None or args.max_area is not None):
         raise UsageError("--size and --max-area apply to the robust mesher, not with --paper, "
                          "--no-optimize or --max-insertions")
-    if paper:
-        mesh = generate(domain, max_insertions=args.max_insertions)
-        if not args.no_optimize:
-            mesh = optimize(mesh)
-    else:
-        mesh = robust(domain, size=args.size, max_area=args.max_area)
+    with compile_notice():  # the studies' commands say it their own way
+        if paper:
+            mesh = generate(domain, max_insertions=args.max_insertions, progress=args.progress)
+            if not args.no_optimize:
+                mesh = optimize(mesh, progress=args.progress)
+        else:
+            mesh = robust(domain, size=args.size, max_area=args.max_area,
+                          progress=args.progress)
     mesh.write(args.output)
     print(f"nodes: {len(mesh.points)} ({mesh.n_boundary} on the boundary)")
     print(f"elements: {len(mesh.triangles)}")

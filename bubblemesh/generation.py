@@ -37,6 +37,7 @@ from ._renumber import spatial_renumbering
 from ._status import CHUNK_DONE, NEED_CAPACITY, STOP_MAX_INSERTIONS, STOP_POPULATION, raise_for
 from ._workspace import Workspace, fits_int32
 from .bubbles import boundary_radii
+from .compiling import maybe_notice
 from .domain import Domain
 from .errors import MeshingError
 from .timing import PhaseClock
@@ -113,7 +114,8 @@ def generate(domain, *, max_insertions=None, progress=False):
     or "max_insertions") and ``phases`` (seconds in boundary_cdt, setup,
     insertion, renumbering)."""
     _check_arguments("generate", domain, max_insertions)
-    return _generate(domain, max_insertions, progress, None)
+    with maybe_notice(progress):
+        return _generate(domain, max_insertions, progress, None)
 
 
 def _check_arguments(name: str, domain: Any, max_insertions: Any) -> None:

@@ -43,6 +43,7 @@ from ._inside import boundary_clearance
 from ._mesh import Mesh, OptimizationStats
 from ._rings import node_adjacency, ring_neighbors, vertex_triangles
 from ._verlet import VerletLists
+from .compiling import maybe_notice
 from .errors import GeometryError, MeshingError
 from .timing import PhaseClock
 from .triangulation import constrained_delaunay
@@ -75,6 +76,11 @@ def optimize(mesh, *, amplification=1.7, rings=3, alpha=0.1, max_iterations=200,
     _check_parameters(amplification=amplification, alpha=alpha, skin=skin, rings=rings,
                       max_iterations=max_iterations, tol=tol)
     mesh.check()
+    with maybe_notice(progress):
+        return _optimize(mesh, amplification, rings, alpha, max_iterations, tol, skin, progress)
+
+
+def _optimize(mesh, amplification, rings, alpha, max_iterations, tol, skin, progress):
     clock = PhaseClock()
     n_b = mesh.n_boundary
     P0 = np.ascontiguousarray(mesh.points)
