@@ -206,7 +206,7 @@ def _generate(domain, max_insertions, progress, size_field, seeds=None, frontal=
         state[S_HEAP] = init_queue(ws.P, ws.R, ws.tri, len(tri), ws.r_e, ws.density,
                                    ws.keys, ws.ids, acc, capped, field, factor, stack)
         step = _centroid_step(area_geo, (capped, field, factor, stack))
-    bar = _progress_bar(progress, expected // 2)
+    bar = _progress_bar(progress, None if lattice else expected // 2)  # seeds: no estimate
     clock.lap("setup")
     try:
         status = _run(ws, state, acc, limit, bar, step)

@@ -135,7 +135,7 @@ from .generation import generate_sized, refuse_beyond_memory
 from .quality import radius_ratio
 from .refinement import refine_boundary
 from .sizing import _EQUILATERAL_RADIUS, SizeField, _float, as_size_function, field_count
-from .timing import PhaseClock
+from .timing import PhaseClock, stage_lines
 from .topology import neighbors_of
 from .triangulation import constrained_delaunay
 
@@ -325,9 +325,10 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
             raise ValueError(f"mesh: {name} must be an integer >= "
                              f"{1 if name == 'rings' else 0}{f' and <= {top}' if top else ''}, "
                              f"got {value!r}")
-    clock = PhaseClock()
+    clock, say = PhaseClock(), stage_lines(progress)
     field, channel, fine = _sized(domain, size, max_area, gradation)
     clock.lap("sizing")
+    say(f"size field, {len(fine.points)} boundary nodes")
     notes = _sharp_corner_warnings(domain)
     for note in notes:
         warnings.warn(note, QualityWarning, stacklevel=3)
@@ -346,12 +347,20 @@ def robust_mesh(domain, *, size=None, max_area=None, gradation=0.25, insertion="
         return _sized(domain, size, max_area, gradation, scale)
 
     mesh = _chosen(domain, field, channel, fine, rescaled=rescaled, **run)
+    say(f"meshed and repaired, {len(mesh.triangles)} elements")
     steeper = _steeper_gradation(domain, size, max_area, field, mesh)
     if steeper is not None:
+        say(f"the walls' grading is over-full: again at gradation {steeper:.4g}")
         s_field, s_channel, s_fine = _sized(domain, size, max_area, steeper)
         other = _chosen(domain, s_field, s_channel, s_fine, rescaled=None, counted=field, **run)
         mesh = _judged(other, mesh, field_count(field, mesh.points, mesh.triangles), finish)[0]
-    return _reported(domain, finish(mesh))
+        say(f"the better of the two kept, {len(mesh.triangles)} elements")
+    mesh = finish(mesh)
+    if progress:
+        q = mesh.quality()
+        say(f"last steps, {len(mesh.triangles)} elements, radius ratio mean {q.mean():.4f}, "
+            f"min {q.min():.4f}")
+    return _reported(domain, mesh)
 
 
 def sharp_corner_flags(domain, points):

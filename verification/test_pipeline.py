@@ -199,6 +199,26 @@ def test_paper_mode_is_generate_then_optimize_bit_for_bit():
         bm.mesh(domain, paper=True, size=0.1)
 
 
+def test_progress_says_each_stage_and_changes_no_bit(capsys):
+    """bm.mesh with progress=True writes a line per stage on stderr, the last
+    one with the count and the radius ratios' mean and minimum of the mesh it
+    returns (eq. 10, computed here), and returns the same bits as without."""
+    domain = bm.Domain.from_loops(list(S.square_with_hole().loops))
+    quiet = bm.mesh(domain, size=0.25)
+    assert capsys.readouterr().err == ""
+    said = bm.mesh(domain, size=0.25, progress=True)
+    lines = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("mesh: ")]
+    for name in ("points", "triangles"):
+        np.testing.assert_array_equal(getattr(said, name), getattr(quiet, name))
+    corners = np.asarray(quiet.points)[np.asarray(quiet.triangles)]
+    a, b, c = (np.linalg.norm(corners[:, i] - corners[:, i - 1], axis=1) for i in range(3))
+    s = (a + b + c) / 2
+    q = 8 * (s - a) * (s - b) * (s - c) / (a * b * c)  # 2r/R, Heron's area in both
+    assert lines[0].startswith("mesh: size field, ") and len(lines) >= 3
+    assert lines[-1].startswith(f"mesh: last steps, {len(quiet.triangles)} elements, radius "
+                                f"ratio mean {q.mean():.4f}, min {q.min():.4f} (")
+
+
 @pytest.mark.parametrize("kwargs, error", [
     (dict(max_area=-1.0), ValueError), (dict(max_area="x"), TypeError),
     (dict(size=0.0), ValueError), (dict(max_iterations=-1), ValueError),
