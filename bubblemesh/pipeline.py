@@ -47,7 +47,9 @@ made safe for ordinary input; ``paper=True`` runs the paper unchanged).
    it is most crowded, the count unchanged (:func:`_swapped`); then free
    nodes are removed while each raises the mean, the count kept within
    PRUNE_WINDOW under the field's and PRUNE_SHARE under its own
-   (:func:`_pruned`).  In meshes of
+   (:func:`_pruned`); where its smallest ratio is below REPAIR_BELOW, the
+   repair of the worst triangles runs once more, kept if it lifts it
+   (:func:`_mended`).  In meshes of
    at most FINAL_BELOW elements the free nodes around the worst triangles
    move together to lift their smallest ratio (:mod:`bubblemesh._minmax`:
    one node alone is often held there by its neighbours), then a last sweep
@@ -398,7 +400,8 @@ def _reported(domain, mesh):
 
 def _finisher(max_area, field):
     """The last steps on a chosen mesh (step 3: the node swaps, the
-    removals that pay, the joint min-max moves, the last mean polish) as a
+    removals that pay, the repair once more, the joint min-max moves, the
+    last mean polish) as a
     function of the mesh, each mesh finished once: a finished mesh is its
     own finish."""
     done = {}
@@ -406,12 +409,40 @@ def _finisher(max_area, field):
     def finish(mesh):
         if id(mesh) not in done:
             made = _pruned(_swapped(mesh, max_area, field), max_area, field)
-            made = _polished(_minmaxed(made, max_area), max_area)
+            made = _polished(_minmaxed(_mended(made, max_area, field), max_area), max_area)
             done[id(mesh)] = (mesh, made)  # the mesh held so that its id stays its own
             done[id(made)] = (made, made)
         return done[id(mesh)][1]
 
     return finish
+
+
+def _mended(mesh, max_area, field):
+    """In a mesh of at most BALANCE_BELOW elements whose smallest ratio is below
+    REPAIR_BELOW, the repair of its worst triangles once more
+    (:func:`~bubblemesh._patch_repair.repair_worst`, the count within
+    REPAIR_WINDOW of the field's, no new triangle below POOR_RATIO), kept where
+    it lifts that smallest ratio: the first repair spent its MEAN_DROP on other
+    patches, and the swaps and removals since changed the worst one's
+    surroundings."""
+    X, T = mesh.points, mesh.triangles
+    before = _smallest_ratio(X, T)
+    if len(T) > BALANCE_BELOW or before >= REPAIR_BELOW:
+        return mesh
+    segments = np.asarray(mesh.segments)
+    movable = np.arange(len(X)) >= mesh.n_boundary
+    movable[np.unique(segments)] = False
+    limit = triangle_limits(X, T, mesh.neighbors, getattr(mesh.domain, "regions", None),
+                            max_area) / (1.0 + AREA_MARGIN)
+    asked = field_count(field, X, T)
+    window = asked * (1.0 - REPAIR_WINDOW), asked * (1.0 + REPAIR_WINDOW)
+    Y, U, old, taken = repair_worst(X, T, segments, movable, limit, REPAIR_BELOW, REPAIR_OPS,
+                                    window, MEAN_HALVINGS, MEAN_STEPS, MEAN_DROP, None, None,
+                                    True)
+    if not taken or _smallest_ratio(Y, U) <= before + RISE:
+        return mesh
+    return _rebuilt(mesh, Y, U, _walled(U, neighbors_of(U), segments, len(Y)), old,
+                    mesh.optimization.repairs + taken)
 
 
 def _judged(a, b, asked, finish):
@@ -1222,7 +1253,7 @@ def _repaired_once(mesh, max_area, field, by_mean):
         return mesh, False
     segments = np.asarray(mesh.segments)
     regions = getattr(mesh.domain, "regions", None)
-    n, N, old, operations = len(X), mesh.neighbors, np.arange(len(X)), 0
+    N, old, operations = mesh.neighbors, np.arange(len(X)), 0
 
     def run(step, *args):  # boundary nodes stay first: only free nodes are removed
         nonlocal X, T, N, old, operations
@@ -1274,12 +1305,19 @@ def _repaired_once(mesh, max_area, field, by_mean):
                 X, T, N, old, operations = plain
     if not operations:
         return mesh, off
+    return _rebuilt(mesh, X, T, N, old, operations), off
+
+
+def _rebuilt(mesh, X, T, N, old, operations):
+    """``mesh`` with the repaired nodes X, triangles T and neighbours N;
+    ``old`` each node's number in ``mesh`` (-1: inserted, its radius half
+    its mean edge, as the area bound's); ``operations`` the repairs in all."""
     radii = np.where(old >= 0, np.asarray(mesh.radii)[np.maximum(old, 0)],
                      _half_mean_edge(X, T))
-    stats = replace(mesh.optimization, repairs=operations, repair_nodes=len(X) - n,
+    stats = replace(mesh.optimization, repairs=operations,
+                    repair_nodes=mesh.optimization.repair_nodes + len(X) - len(mesh.points),
                     min_ratio=_smallest_ratio(X, T))
-    return replace(mesh, points=X, triangles=T, neighbors=N, radii=radii,
-                   optimization=stats), off
+    return replace(mesh, points=X, triangles=T, neighbors=N, radii=radii, optimization=stats)
 
 
 def _poor_off(X, T, sharp):

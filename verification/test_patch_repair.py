@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -658,7 +659,7 @@ def test_a_count_past_the_window_still_lets_the_repair_insert(monkeypatch):
 
 
 @pytest.mark.heavy
-@pytest.mark.parametrize("step, k", [("_swapped", 1000), ("_pruned", 100)])
+@pytest.mark.parametrize("step, k", [("_swapped", 1000), ("_pruned", 100), ("_mended", 100)])
 def test_last_steps_take_no_triangle_below_0_7_where_a_corner_sets_the_minimum(
         step, k, monkeypatch):
     """Triangle's la.poly at area/k: the mesh's minimum (0.12) is at a
@@ -916,3 +917,47 @@ def test_a_patchs_distinct_nodes_are_numpys_unique(values, columns):
     a = np.array(values[:len(values) // columns * columns], np.int64).reshape(-1, columns)
     np.testing.assert_array_equal(_unique(a), np.unique(a))
     np.testing.assert_array_equal(_unique(a.ravel()), np.unique(a))
+
+
+def _one_triangle_corner(mesh, corner):
+    """``mesh`` with the edge from ``corner`` (a node in two triangles) to its
+    interior neighbour flipped: the corner left in one triangle."""
+    T = np.array(mesh.triangles)
+    c = int(np.flatnonzero((mesh.points == corner).all(axis=1))[0])
+    ts = np.flatnonzero((T == c).any(axis=1))
+    assert len(ts) == 2
+    a, b = (np.roll(T[t], -int(np.flatnonzero(T[t] == c)[0])) for t in ts)  # (c, x, y) CCW
+    if a[2] != b[1]:
+        a, b = b, a
+    w1, inner, w2 = a[1], a[2], b[2]  # the quadrilateral c, w1, inner, w2 counter-clockwise
+    T[ts[0]], T[ts[1]] = (c, w1, w2), (w1, inner, w2)
+    N = pipeline._walled(T, pipeline.neighbors_of(T), np.asarray(mesh.segments),
+                         len(mesh.points))
+    return replace(mesh, triangles=T, neighbors=N)
+
+
+@pytest.mark.heavy
+def test_the_last_repair_lifts_a_corner_the_first_left():
+    """A unit square at area/200 whose corner (0, 0) is left in one triangle
+    (its two triangles' diagonal flipped; a right angle caps that triangle at
+    2(sqrt 2 - 1)): the repair in the last steps splits it again.  The
+    smallest ratio rises past that bound, the mesh stays valid and conforming
+    with its boundary nodes in place and its count within REPAIR_WINDOW of
+    the field's; a mesh already above REPAIR_BELOW is returned as it is."""
+    domain = bm.Domain.from_loops([np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float)])
+    max_area = domain.area / 200
+    field = pipeline.size_field(domain, max_area=max_area)
+    mesh = bm.mesh(domain, max_area=max_area)
+    assert O.radius_ratio_reference(mesh.points, mesh.triangles).min() >= pipeline.REPAIR_BELOW
+    assert pipeline._mended(mesh, max_area, field) is mesh
+    cornered = _one_triangle_corner(mesh, (0.0, 0.0))
+    bound = 2 * (math.sqrt(2) - 1)
+    assert O.radius_ratio_reference(cornered.points, cornered.triangles).min() <= bound + 1e-12
+    mended = pipeline._mended(cornered, max_area, field)
+    assert O.radius_ratio_reference(mended.points, mended.triangles).min() > bound + 1e-3
+    O.check_valid(mended.points, mended.triangles, mended.neighbors)
+    O.check_conforming(mended.points, mended.triangles, mended.segments, area=1.0, rel=1e-9)
+    np.testing.assert_array_equal(mended.points[:mended.n_boundary],
+                                  mesh.points[:mesh.n_boundary])
+    asked = pipeline.field_count(field, mesh.points, mesh.triangles)
+    assert abs(len(mended.triangles) / asked - 1) <= pipeline.REPAIR_WINDOW
