@@ -3,7 +3,7 @@
 Every kernel is compiled on its first call and kept in numba's on-disk cache
 (``cache=True``), so the first mesh after an install, an upgrade or a cleared
 cache waits a minute or two with nothing to show.  :func:`compile_notice`
-says so once, on the first kernel that numba actually compiles: loading a
+says so once a process, on the first kernel that numba actually compiles: loading a
 cached kernel fires no ``numba:compile`` event (numba's event API), so warm
 runs stay silent.  The command line always listens; the library only with
 ``progress=True``.
@@ -13,6 +13,8 @@ import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import IO
+
+_said = False  # once a process: bm.generate then bm.optimize compile in turn
 
 NOTICE = ("bubblemesh: compiling its numba kernels; this happens once per install and takes "
           "a minute or two (numba caches them)")
@@ -25,15 +27,13 @@ def compile_notice(stream: IO[str] | None = None) -> Iterator[None]:
     or numba is off (NUMBA_DISABLE_JIT)."""
     from numba.core import event
 
-    said = False
-
     class Notice(event.Listener):
         def on_start(self, ev: event.Event) -> None:
-            nonlocal said
+            global _said
             dispatcher = (ev.data or {}).get("dispatcher")
             module = getattr(getattr(dispatcher, "py_func", None), "__module__", "") or ""
-            if not said and module.split(".")[0] == "bubblemesh":
-                said = True
+            if not _said and module.split(".")[0] == "bubblemesh":
+                _said = True
                 print(NOTICE, file=stream if stream is not None else sys.stderr, flush=True)
 
         def on_end(self, ev: event.Event) -> None:

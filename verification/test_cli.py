@@ -372,7 +372,7 @@ COMPILE = """
 import sys
 from numba import njit
 from bubblemesh.compiling import compile_notice
-from bubblemesh.predicates import orient2d
+from bubblemesh.predicates import incircle, orient2d
 
 @njit(cache=True)
 def foreign(x):
@@ -383,15 +383,18 @@ with compile_notice(sys.stdout):
     print("foreign compiled", flush=True)
     orient2d(0.0, 0.0, 1.0, 0.0, 0.0, 1.0)
     orient2d(0.0, 0.0, 1.0, 0.0, 0.0, -1.0)
+with compile_notice(sys.stdout):  # as bm.generate then bm.optimize: said once a process
+    incircle(0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.2, 0.2)
 """
 
 
 @pytest.mark.skipif(os.environ.get("NUMBA_DISABLE_JIT", "0") != "0", reason="nothing compiles")
 def test_a_word_while_numba_compiles_and_none_from_its_cache(tmp_path):
     """In a process whose numba cache is empty (NUMBA_CACHE_DIR a new folder),
-    the first bubblemesh kernel compiled says NOTICE once, after a foreign
-    kernel compiled silently; a second process on the same cache loads the
-    kernel and says nothing (numba reports a compile only on a cache miss)."""
+    the first bubblemesh kernel compiled says NOTICE, after a foreign kernel
+    compiled silently, and a second one in a later block says nothing more; a
+    second process on the same cache loads the kernels and says nothing (numba
+    reports a compile only on a cache miss)."""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
     script = tmp_path / "compile.py"  # a file: numba caches no kernel of `python -c`
     script.write_text(COMPILE)
