@@ -800,10 +800,19 @@ def _check_scale(domain, field):
     P = np.asarray(domain.points)
     extent = float(np.max(P.max(axis=0) - P.min(axis=0)))
     smallest = float(field.values.min())
-    if not extent <= MAX_SCALE * smallest:
-        raise MeshingError(f"mesh: the domain spans {extent:.3g} but its smallest size is "
-                           f"{smallest:.3g}, more than {MAX_SCALE:.0e} times smaller: rescale "
-                           "or split the domain, or use paper=True")
+    if extent <= MAX_SCALE * smallest:
+        return
+    S = np.asarray(domain.segments)
+    length = np.hypot(*(P[S[:, 0]] - P[S[:, 1]]).T) if len(S) else np.full(1, np.inf)
+    k = int(np.argmin(length))
+    if not extent <= MAX_SCALE * length[k]:  # mostly two nearly coincident nodes
+        a, b = (tuple(float(c) for c in P[v]) for v in S[k])
+        raise MeshingError(f"mesh: the domain spans {extent:.3g} but its segment from {a} "
+                           f"to {b} is {length[k]:.3g} long, more than {MAX_SCALE:.0e} times "
+                           "shorter: merge its ends, or rescale or split the domain")
+    raise MeshingError(f"mesh: the domain spans {extent:.3g} but its smallest size is "
+                       f"{smallest:.3g}, more than {MAX_SCALE:.0e} times smaller: rescale "
+                       "or split the domain, or use paper=True")
 
 
 def _lattice(domain, field, source, channel=None):

@@ -4,6 +4,7 @@ where.  Oracles: the exact validity and conformity checks of ``oracles``."""
 
 from __future__ import annotations
 
+import math
 import subprocess
 import sys
 import warnings
@@ -137,16 +138,36 @@ def test_a_boundary_finer_than_memory_allows_is_refused_up_front():
 
 def test_a_domain_beyond_double_precision_s_range_is_refused_in_one_line():
     """A triangle of base 1 reaching 1e14 away: a graded mesh over 14 orders
-    of magnitude is refused by bm.mesh (quickly, naming both sizes); 1e4 is
-    meshed, valid."""
+    of magnitude is refused by bm.mesh (quickly, naming the span and the
+    short segment); 1e4 is meshed, valid."""
     far = bm.Domain.from_loops([[(0.0, 0.0), (1.0, 0.0), (0.5, 1e14)]])
-    with pytest.raises(bm.MeshingError, match=r"spans 1e\+14 .* smallest size"):
+    with pytest.raises(bm.MeshingError,
+                       match=r"^mesh: the domain spans 1e\+14 but its segment from \(0\.0, 0\.0\) "
+                       r"to \(1\.0, 0\.0\) is 1 long[^\n]*$"):
         bm.mesh(far)
     near = bm.Domain.from_loops([[(0.0, 0.0), (1.0, 0.0), (0.5, 1e4)]])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", bm.QualityWarning)
         m = bm.mesh(near)
     O.check_valid(m.points, m.triangles, m.neighbors)
+
+
+def test_nearly_coincident_nodes_are_named_where_they_break_the_scale():
+    """A channel wall with a half-circle bump made with cos/sin: sin(pi) is
+    3.7e-17, not 0, so the bump's end and the wall's corner are two nodes
+    3.7e-17 apart.  bm.mesh refuses it naming both nodes, not only a size."""
+    t = np.linspace(0.0, np.pi, 40)
+    bump = np.column_stack([2.0 + 0.3 * np.cos(t), 0.3 * np.sin(t)])[::-1]
+    loop = np.vstack([[(-6.0, 0.0), (1.7, 0.0)], bump, [(6.0, 0.0), (6.0, 3.0), (-6.0, 3.0)]])
+    apart = math.hypot(*(loop[1] - loop[2]))
+    assert 0.0 < apart < 1e-16
+    with pytest.raises(bm.MeshingError) as refused:
+        bm.mesh(bm.Domain.from_loops([loop]))
+    message = str(refused.value)
+    assert "\n" not in message
+    a, b = (f"({x!r}, {y!r})" for x, y in loop[1:3].tolist())
+    assert f"{a} to {b}" in message or f"{b} to {a}" in message
+    assert f"is {apart:.3g} long" in message
 
 
 @pytest.mark.heavy
