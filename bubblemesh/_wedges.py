@@ -14,8 +14,11 @@ corner's own triangle has legs r and r sqrt(q).  q maximises the zigzag's radius
 (eq. 10: 0.97 at 20 degrees) and, where an isosceles corner triangle could
 reach 0.7 (SHARP_ANGLE and up), the corner triangle's too.  The progression
 stops where its spacing would exceed the size field, or at the middle of a
-wall graded from both ends (else where its next node would leave the wall);
-the field splits the rest.  Needles (corners under NEEDLE) are
+wall graded from both ends, else where its next node would leave the wall;
+but where the wall goes on nearly straight past its end (it turns by at most
+ONWARD there), at the node from which that end is nearest q times as far, in
+ratio (at least sqrt(q) times): the end stands in for the next node, and the
+strip runs on.  The field splits the rest.  Needles (corners under NEEDLE) are
 left alone: their progression would take more than MAX_PER_WALL nodes of
 nearly one position.  Concentric shells around small input angles play the
 same part in Ruppert-type refinement.
@@ -53,6 +56,7 @@ CLEARANCE_BLOCK = 1 << 20  # corner-segment pairs per block of a ladder's cleara
 LADDER_WIDTH = 1.3  # a ladder runs on while the wedge is narrower than this times the size
 LADDER_TOP = math.radians(40.0)  # the ladder's table spans SHARP_ANGLE to this
 NEEDLE = math.radians(3.0)  # sharper corners are needles: a progression would crowd them
+ONWARD = math.radians(30.0)  # a wall whose far end turns by at most this goes on past it
 _GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
 
 
@@ -320,7 +324,12 @@ def _graded(theta, size, below, node, far, corner, away, ladder, clearance):
     u = dist / length[:, None]
     where = corner[:, None, :] + u[:, :, None] * away[:, None, :]
     h = size(where.reshape(-1, 2)).reshape(u.shape) if len(corner) else u
-    inside = np.where(shared[:, None], u <= 0.5, u * q[:, None] <= 1.0)
+    # where the wall goes on nearly straight past its end, a zigzag's last node is the
+    # one whose step to that end is nearest q (in ratio); a ladder's last layer, and a
+    # wall that ends at a corner (the short piece would crowd it), keep a whole step
+    onward = ~ladder & (np.abs(theta[far] - np.pi) <= ONWARD)
+    last = np.where(onward, np.sqrt(q), q)[:, None]
+    inside = np.where(shared[:, None], u <= 0.5, u * last <= 1.0)
     # a zigzag runs while its spacing is below the field's size, a ladder while the
     # wedge is narrower than LADDER_WIDTH times it
     wide = np.where(ladder[:, None], 2.0 * np.sin(0.5 * theta[node])[:, None] / LADDER_WIDTH,
@@ -334,7 +343,7 @@ def _graded(theta, size, below, node, far, corner, away, ladder, clearance):
     # other corner grades too) or the clearance
     middle = shared[:, None] & (u > 0.5)
     beyond = dist >= clearance[:, None]
-    closed = ~middle & ((u * q[:, None] > 1.0) | beyond)
+    closed = ~middle & ((u * last > 1.0) | beyond)
     open_end = (count == MAX_PER_WALL) | ~np.take_along_axis(closed, after, axis=1)[:, 0]
     # a ladder of two layers or more whose first node not kept lies on its wall where
     # the wedge is wide stops where the wedge widens, though its wall ends a layer later

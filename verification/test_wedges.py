@@ -165,6 +165,22 @@ def test_short_walls_each_get_their_first_node():
                                atol=2.0**-21 * 3.0)
 
 
+@pytest.mark.parametrize("cut", np.linspace(0.2, 0.4, 9))
+def test_a_wall_that_goes_on_straight_ends_its_zigzag_nearest_in_ratio(cut):
+    # the 20-degree corner's wall is cut at ``cut`` by an input node where it goes on
+    # straight: the cut stands in for the zigzag's next node, so it lies sqrt(q) to
+    # q^1.5 times as far as the last graded node (a whole step past it: q to q^2)
+    theta, h = math.radians(20), 0.5
+    kite = _kite(theta)[0]
+    loop = np.array([kite[0], (cut, 0.0), *kite[1:]])
+    result = refine_boundary([loop], h, sharp_angle=GRADE_ANGLE)
+    check_refinement([loop], result)
+    graded = np.hypot(*result.loops[0][1:result.input_index[0][1]].T)
+    q = float(zigzag_ratio(theta))
+    np.testing.assert_allclose(graded[1:] / graded[:-1], q, rtol=1e-9)
+    assert math.sqrt(q) <= cut / graded[-1] < q ** 1.5
+
+
 def test_no_grading_above_the_angle_or_below_the_needle():
     for degrees in (50.0, math.degrees(NEEDLE) / 2):
         loops = _kite(math.radians(degrees))
@@ -322,6 +338,32 @@ def test_a_wedge_whose_first_walls_are_short_stays_above_0_7(degrees):
     loop = np.array([(0.0, 0.0), (0.5, -0.5 * t), (3.0, -3.0 * t - 0.3), (3.0, 0.5),
                      (1.5, 0.5), (1.5, 0.0)])
     mesh = bm.mesh(bm.Domain.from_loops([loop]), max_area=0.02)
+    check_valid(mesh.points, mesh.triangles, mesh.neighbors)
+    assert _off_corner_minimum(mesh)[0] >= 0.7
+
+
+def _crescent(n_outer, n_inner, radius=0.8, centre=0.4):
+    """The unit disk less the disk of ``radius`` about (``centre``, 0): a
+    crescent with two 22-degree cusps, its arcs drawn with n_outer and
+    n_inner nodes from cusp to cusp, so that each cusp's walls are short
+    pieces of nearly straight walls."""
+    x = (1.0 + centre * centre - radius * radius) / (2.0 * centre)
+    a, b = math.acos(x), math.atan2(math.sqrt(1.0 - x * x), x - centre)
+    t = np.linspace(a, 2.0 * math.pi - a, n_outer)
+    s = np.linspace(2.0 * math.pi - b, b, n_inner)[1:-1]
+    return np.vstack([np.column_stack([np.cos(t), np.sin(t)]),
+                      np.column_stack([centre + radius * np.cos(s), radius * np.sin(s)])])
+
+
+@pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
+@pytest.mark.parametrize("n_outer, n_inner", [(40, 30), (60, 45)])
+def test_cusps_whose_walls_are_short_pieces_stay_above_0_7(n_outer, n_inner):
+    # the zigzag on each wall ends at the wall's end; a rule that keeps a whole step
+    # past its last node leaves one wall a piece too long, two nodes of the other
+    # wall face it and the strip between holds triangles of 0.53-0.66
+    domain = bm.Domain.from_loops([_crescent(n_outer, n_inner)])
+    assert (np.degrees(corner_angles(domain)) < math.degrees(SHARP_ANGLE)).sum() == 2
+    mesh = bm.mesh(domain, max_area=domain.area / 100)
     check_valid(mesh.points, mesh.triangles, mesh.neighbors)
     assert _off_corner_minimum(mesh)[0] >= 0.7
 
