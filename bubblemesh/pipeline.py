@@ -164,6 +164,8 @@ REPAIR_BELOW = 0.9  # patches around triangles below this ratio are re-triangula
 REPAIR_OPS = 16  # at most this many of them
 REPAIR_SPARE = 4  # or this many nodes past it, when a balance elsewhere then takes them back
 REPAIR_WINDOW = 0.035  # they keep the element count this close to the field's (or bring it closer)
+MEND_WINDOW = 0.045  # the repair once more may take it this far (COUNT_TOL less a margin)
+MEND_BELOW = 2.0 * (math.sqrt(2.0) - 1.0) + 1e-3  # where a triangle may hold a whole right angle
 REPAIR_REACH = 0.01  # or, for triangles below POOR_RATIO, this close to its own (_repair_counts)
 POOR_SUM_DROP = 1.0  # then the repair may lower the summed ratio by this (small meshes)
 BALANCE_WINDOW = 0.03  # a count further off the field's gets nodes removed or inserted
@@ -424,7 +426,8 @@ def _mended(mesh, max_area, field):
     REPAIR_WINDOW of the field's, no new triangle below POOR_RATIO), kept where
     it lifts that smallest ratio: the first repair spent its MEAN_DROP on other
     patches, and the swaps and removals since changed the worst one's
-    surroundings."""
+    surroundings.  Below MEND_BELOW, where a triangle may hold a whole right
+    angle and only a point inserted splits it, the count may go to MEND_WINDOW."""
     X, T = mesh.points, mesh.triangles
     before = _smallest_ratio(X, T)
     if len(T) > BALANCE_BELOW or before >= REPAIR_BELOW:
@@ -435,7 +438,8 @@ def _mended(mesh, max_area, field):
     limit = triangle_limits(X, T, mesh.neighbors, getattr(mesh.domain, "regions", None),
                             max_area) / (1.0 + AREA_MARGIN)
     asked = field_count(field, X, T)
-    window = asked * (1.0 - REPAIR_WINDOW), asked * (1.0 + REPAIR_WINDOW)
+    share = MEND_WINDOW if before < MEND_BELOW else REPAIR_WINDOW  # one point splits it
+    window = asked * (1.0 - share), asked * (1.0 + share)
     Y, U, old, taken = repair_worst(X, T, segments, movable, limit, REPAIR_BELOW, REPAIR_OPS,
                                     window, MEAN_HALVINGS, MEAN_STEPS, MEAN_DROP, None, None,
                                     True)
