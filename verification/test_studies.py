@@ -756,6 +756,29 @@ def test_the_shapely_set_builds_valid_domains_of_geos_areas():
     assert len(set(names)) == len(names) == 15
 
 
+def test_the_second_shapely_set_builds_valid_domains_of_geos_areas():
+    """Each drawing of the more-shapely set is one valid polygon (GEOS), and
+    its Domain has GEOS's area and a node at every ring vertex; no two ring
+    vertices are so close that bm.mesh would refuse the scale."""
+    pytest.importorskip("shapely")
+    from bubblemesh.studies.shapes import more_shapely_inputs
+
+    names = []
+    for name, polygon in more_shapely_inputs():
+        names.append(name)
+        assert polygon.geom_type == "Polygon" and polygon.is_valid, name
+        domain = bm.Domain.from_shapely(polygon)
+        assert domain.area == pytest.approx(polygon.area, rel=1e-12), name
+        rings = [polygon.exterior, *polygon.interiors]
+        vertices = np.unique(np.vstack([np.asarray(r.coords) for r in rings]), axis=0)
+        assert (np.unique(domain.points, axis=0) == vertices).all(), name
+        for ring in rings:
+            xy = np.asarray(ring.coords)
+            span = np.ptp(np.asarray(polygon.exterior.coords), axis=0).max()
+            assert np.hypot(*np.diff(xy, axis=0).T).min() > 1e-9 * span, name
+    assert len(set(names)) == len(names) == 29
+
+
 def test_the_glyph_set_builds_valid_domains_of_geos_areas():
     """Each letter outline is one valid polygon (GEOS) with the counters of
     the letter as holes, and its Domain has GEOS's area and a node at every

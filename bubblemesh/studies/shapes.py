@@ -8,6 +8,7 @@ Frontal-Delaunay and Triangle -pq30 at matched counts.
     python -m bubblemesh.studies.shapes --set planar-graphs --sizes 30 100 1000
     python -m bubblemesh.studies.shapes --set shapely --sizes 30 100 1000
     python -m bubblemesh.studies.shapes --set glyphs --sizes 30 100 1000
+    python -m bubblemesh.studies.shapes --set more-shapely --sizes 30 100 1000
 
 ``--set rectangles`` sweeps long rectangles (channels 4 to 30 times longer
 than wide) instead of the shapes; ``--set triangle-examples`` the ``.poly``
@@ -17,7 +18,8 @@ holes, interior constraints, free points, a lake with islands), read by
 of several materials (:func:`planar_graphs`, by
 :meth:`bubblemesh.Domain.from_pslg`); ``--set shapely`` shapes drawn with
 shapely (:func:`shapely_inputs`); ``--set glyphs`` letter outlines
-(:func:`glyph_inputs`).
+(:func:`glyph_inputs`); ``--set more-shapely`` kinds of drawings the others
+lack (:func:`more_shapely_inputs`).
 
 Every shape is meshed with max_area = area / k for each k of ``--sizes``; the
 rows are :func:`bubblemesh.studies.quality.case_rows` (Gmsh on bm's refined
@@ -230,6 +232,103 @@ def shapely_inputs():
     yield "gear, 40 teeth", sg.Polygon(geometry.gear(40, 1.0, 1.1, 10.0))
 
 
+def _coast(rng, corners=12, levels=4, rough=0.25):
+    """An island: ``corners`` random points about a unit circle, each edge
+    split ``levels`` times at its midpoint moved across it by up to
+    ``rough`` of its length (a fractal coastline), the largest valid part."""
+    from shapely import geometry as sg  # optional, as in Domain.from_shapely
+
+    a = np.sort(rng.uniform(0.0, 2.0 * math.pi, corners))
+    p = np.column_stack([np.cos(a), np.sin(a)]) * rng.uniform(0.7, 1.2, (corners, 1))
+    for _ in range(levels):
+        d = np.roll(p, -1, axis=0) - p
+        middle = p + 0.5 * d + np.column_stack([-d[:, 1], d[:, 0]]) * rng.uniform(
+            -rough, rough, (len(p), 1))
+        p = np.column_stack([p, middle]).reshape(-1, 2)
+    island = sg.Polygon(p).buffer(0)
+    return max(getattr(island, "geoms", [island]), key=lambda part: part.area)
+
+
+def _spiky_star(points, tip_degrees):
+    """A star of ``points`` tips of ``tip_degrees`` on the unit circle."""
+    half, tip = math.pi / points, math.radians(tip_degrees)
+    inner = math.sin(tip / 2) / math.sin(tip / 2 + half)
+    return _star(points, inner)
+
+
+def more_shapely_inputs():
+    """(name, shapely Polygon): drawings of kinds the other sets lack: fractal
+    coastlines with a lake, a 10:1 ellipse, random convex hulls, stars of 10-
+    and 20-degree tips, a crescent (22-degree cusps), an eccentric annulus, a
+    grid of square holes, a channel junction, thin fins and teeth, a half-round
+    bump on a long wall, a thin triangle, a maze, a slot, an airfoil in a far
+    field 20 chords out, a hole 1e-3 across, a fillet of 0.01 on long edges,
+    one wall drawn in 80 pieces beside three in one."""
+    from shapely import affinity, ops
+    from shapely import geometry as sg
+
+    rng = np.random.default_rng(21)
+    for k in range(3):
+        coast = _coast(rng)
+        lake = coast.centroid.buffer(0.15, quad_segs=6)
+        yield f"coast {k}", coast.difference(lake) if coast.contains(lake) else coast
+    t = np.linspace(0.0, 2.0 * math.pi, 120, endpoint=False)
+    yield "ellipse 10:1", sg.Polygon(np.column_stack([5.0 * np.cos(t), 0.5 * np.sin(t)]))
+    for k in range(3):
+        yield f"convex hull {k}", sg.MultiPoint(rng.uniform(0.0, 1.0, (9, 2))).convex_hull
+    for tip in (10, 20):
+        yield f"star, 6 tips of {tip} degrees", sg.Polygon(_spiky_star(6, tip))
+    disk = sg.Point(0, 0).buffer(1.0, quad_segs=16)
+    yield "crescent", disk.difference(sg.Point(0.4, 0).buffer(0.8, quad_segs=16))
+    yield "eccentric annulus, gap 0.02", disk.difference(sg.Point(0.28, 0).buffer(0.7,
+                                                                                   quad_segs=16))
+    holes = [sg.box(0.2 + 0.4 * i, 0.2 + 0.4 * j, 0.35 + 0.4 * i, 0.35 + 0.4 * j)
+             for i in range(6) for j in range(3)]
+    yield "grid of square holes", sg.box(0, 0, 2.6, 1.4).difference(ops.unary_union(holes))
+    arms = [affinity.rotate(sg.box(0, -0.1, 2, 0.1), a, origin=(0, 0)) for a in (0, 70, 160, 250)]
+    yield "channel junction", ops.unary_union(arms + [sg.Point(0, 0).buffer(0.25, quad_segs=8)])
+    teeth = [sg.box(0.1 + 0.4 * i, 0.3, 0.2 + 0.4 * i, 1.5) for i in range(10)]
+    yield "comb of thin teeth", sg.box(0, 0, 4, 0.3).union(ops.unary_union(teeth))
+    fins = [sg.box(0.1 + 0.25 * i, 0.2, 0.15 + 0.25 * i, 1.2) for i in range(12)]
+    yield "heat sink", sg.box(0, 0, 3.05, 0.2).union(ops.unary_union(fins))
+    bump = 2.0 + 0.3 * np.exp(1j * np.linspace(math.pi, 0.0, 40))
+    bump = np.column_stack([bump.real, bump.imag])
+    bump[[0, -1], 1] = 0.0  # sin(pi) is 1.2e-16, not 0: the wall's own nodes
+    yield "long walls, half-round bump", sg.Polygon(
+        [(-6, 0), *bump, (6, 0), (6, 3), (-6, 3)])
+    yield "triangle 30-60-90", sg.Polygon([(0, 0), (3, 0), (0, math.sqrt(3))])
+    eight = math.radians(8)
+    yield "triangle of 8 degrees", sg.Polygon([(0, 0), (4, 0),
+                                                (4 * math.cos(eight), 4 * math.sin(eight))])
+    yield "trapezoid", sg.Polygon([(0, 0), (5, 0), (4, 1), (1, 1)])
+    yield "U channel", sg.box(0, 0, 3, 2).difference(sg.box(0.4, 0.4, 2.6, 2.0))
+    yield "plate, hole near its edge", sg.box(0, 0, 3, 2).difference(
+        sg.Point(1.5, 0.45).buffer(0.4, quad_segs=10))
+    foil = sg.Polygon(geometry.naca_airfoil(0.12, 60, sharp=False))
+    yield "airfoil in a far field", sg.Point(0.5, 0).buffer(20, quad_segs=16).difference(foil)
+    yield "square, hole 1e-3 across", sg.box(0, 0, 1, 1).difference(
+        sg.Point(0.5, 0.5).buffer(5e-4, quad_segs=8))
+    bracket = sg.box(0, 0, 4, 0.5).union(sg.box(0, 0, 0.5, 3))
+    yield "bracket, fillet 0.01", bracket.buffer(-0.01, quad_segs=8).buffer(0.01, quad_segs=8)
+    corridors = [(0, 0, 5, 0.3), (4.7, 0, 5, 3), (0, 2.7, 5, 3), (0, 1.35, 3.5, 1.65),
+                 (0, 0, 0.3, 1.65), (3.2, 1.35, 3.5, 2.7)]
+    yield "maze", ops.unary_union([sg.box(*c) for c in corridors])
+    yield "one wall in 80 pieces", sg.Polygon(
+        [(x, 0.0) for x in np.linspace(0, 2, 81)] + [(2, 1), (0, 1)])
+    a = np.linspace(0, 2 * math.pi, 400, endpoint=False)
+    r = 1 + 0.3 * np.sin(5 * a) + 0.1 * np.sin(17 * a)
+    yield "wavy blob", sg.Polygon(np.column_stack([r * np.cos(a), r * np.sin(a)]))
+    yield "slot from the edge", sg.box(0, 0, 2, 1).difference(sg.box(0.9, 0.4, 2.1, 0.6))
+    hexagon = sg.Polygon(_regular(6))
+    yield "hexagon, pentagon hole", hexagon.difference(sg.Polygon(_regular(5, 0.4, phase=0.3)))
+
+
+def more_shapely_shapes():
+    """(name, domain) for each of :func:`more_shapely_inputs`."""
+    for name, polygon in more_shapely_inputs():
+        yield name, bm.Domain.from_shapely(polygon)
+
+
 def shapely_shapes():
     """(name, domain) for each of :func:`shapely_inputs`, its ring vertices
     the boundary nodes (:meth:`bubblemesh.Domain.from_shapely`)."""
@@ -271,7 +370,8 @@ def glyphs():
 
 
 SETS = {"shapes": shapes, "rectangles": rectangles, "triangle-examples": triangle_examples,
-        "planar-graphs": planar_graphs, "shapely": shapely_shapes, "glyphs": glyphs}
+        "planar-graphs": planar_graphs, "shapely": shapely_shapes, "glyphs": glyphs,
+        "more-shapely": more_shapely_shapes}
 
 
 def sweep(sizes=SIZES, out_dir=None, names=None, which="shapes"):
