@@ -355,6 +355,7 @@ def _crescent(n_outer, n_inner, radius=0.8, centre=0.4):
                       np.column_stack([centre + radius * np.cos(s), radius * np.sin(s)])])
 
 
+@pytest.mark.heavy
 @pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
 @pytest.mark.parametrize("n_outer, n_inner", [(40, 30), (60, 45)])
 def test_cusps_whose_walls_are_short_pieces_stay_above_0_7(n_outer, n_inner):
