@@ -737,45 +737,39 @@ def test_the_shape_sweep_builds_valid_domains_of_the_stated_areas():
     assert len(set(names)) == len(names) == 20
 
 
-def test_the_shapely_set_builds_valid_domains_of_geos_areas():
-    """Each drawing of the shapely set is one valid polygon (GEOS), and its
-    Domain has GEOS's area and a node at every ring vertex."""
-    pytest.importorskip("shapely")
-    from bubblemesh.studies.shapes import shapely_inputs
-
+def _check_drawings(inputs):
+    """Each (name, polygon) of ``inputs`` is one valid polygon (GEOS) whose
+    Domain has GEOS's area and exactly its ring vertices as nodes, no two
+    consecutive ones nearly coincident (bm.mesh would refuse the scale);
+    returns the names."""
     names = []
-    for name, polygon in shapely_inputs():
+    for name, polygon in inputs:
         names.append(name)
         assert polygon.geom_type == "Polygon" and polygon.is_valid, name
         domain = bm.Domain.from_shapely(polygon)
         assert domain.area == pytest.approx(polygon.area, rel=1e-12), name
-        rings = [polygon.exterior, *polygon.interiors]
-        vertices = np.unique(np.vstack([np.asarray(r.coords) for r in rings]), axis=0)
+        rings = [np.asarray(r.coords) for r in (polygon.exterior, *polygon.interiors)]
+        vertices = np.unique(np.vstack(rings), axis=0)
         assert len(vertices) == len(domain.points), name
         assert (np.unique(domain.points, axis=0) == vertices).all(), name
+        span = np.ptp(rings[0], axis=0).max()
+        assert min(np.hypot(*np.diff(r, axis=0).T).min() for r in rings) > 1e-9 * span, name
+    return names
+
+
+def test_the_shapely_set_builds_valid_domains_of_geos_areas():
+    pytest.importorskip("shapely")
+    from bubblemesh.studies.shapes import shapely_inputs
+
+    names = _check_drawings(shapely_inputs())
     assert len(set(names)) == len(names) == 15
 
 
 def test_the_second_shapely_set_builds_valid_domains_of_geos_areas():
-    """Each drawing of the more-shapely set is one valid polygon (GEOS), and
-    its Domain has GEOS's area and a node at every ring vertex; no two ring
-    vertices are so close that bm.mesh would refuse the scale."""
     pytest.importorskip("shapely")
     from bubblemesh.studies.shapes import more_shapely_inputs
 
-    names = []
-    for name, polygon in more_shapely_inputs():
-        names.append(name)
-        assert polygon.geom_type == "Polygon" and polygon.is_valid, name
-        domain = bm.Domain.from_shapely(polygon)
-        assert domain.area == pytest.approx(polygon.area, rel=1e-12), name
-        rings = [polygon.exterior, *polygon.interiors]
-        vertices = np.unique(np.vstack([np.asarray(r.coords) for r in rings]), axis=0)
-        assert (np.unique(domain.points, axis=0) == vertices).all(), name
-        for ring in rings:
-            xy = np.asarray(ring.coords)
-            span = np.ptp(np.asarray(polygon.exterior.coords), axis=0).max()
-            assert np.hypot(*np.diff(xy, axis=0).T).min() > 1e-9 * span, name
+    names = _check_drawings(more_shapely_inputs())
     assert len(set(names)) == len(names) == 29
 
 
