@@ -174,6 +174,7 @@ def test_split_segments_keep_the_boundary_first_and_their_markers(seen, monkeypa
     assert np.array_equal(mesh.radii[:first], before.radii[:first])
 
 
+@pytest.mark.heavy
 def test_the_bounded_mesh_conforms_to_the_input_boundary():
     verify = pytest.importorskip("bubblemesh.verify")
     outer = np.array([(0, 0), (5, 0), (5, 3), (0, 3)], float)

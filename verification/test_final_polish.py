@@ -113,6 +113,7 @@ def test_beside_a_sharp_corner_the_polish_takes_no_triangle_below_keep(monkeypat
     _check_polish(before, pipeline._polished(before, None), None)
 
 
+@pytest.mark.heavy
 def test_beside_a_narrow_gap_the_polish_leaves_the_poor_triangles_alone(monkeypatch):
     """A 2 x 1 rectangle with a hole of radius 0.47 (48 segments) in its
     middle, 0.03 off both long walls, at area / 150: triangles below KEEP

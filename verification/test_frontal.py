@@ -131,7 +131,9 @@ def test_an_open_corner_gets_a_node_on_its_bisector(sides, divide):
     O.check_constrained_delaunay(m.points, T, m.segments)
 
 
-@pytest.mark.parametrize("sides, per", [(3, 2000), (6, 2000), (3, 300), (6, 300)])
+@pytest.mark.parametrize("sides, per", [pytest.param(3, 2000, marks=pytest.mark.heavy),
+                                        pytest.param(6, 2000, marks=pytest.mark.heavy),
+                                        (3, 300), (6, 300)])
 def test_a_domain_on_one_lattice_gets_that_lattice(sides, per):
     """An equilateral triangle and a regular hexagon given by their corners:
     their walls, cut into equal pieces, lie on one triangular lattice, and
@@ -177,6 +179,7 @@ def test_the_lattice_frame_lies_on_a_wall_cut_in_equal_pieces(loops, size):
     assert (1 - ALIGN_SLACK) * field.cap <= step <= (1 + ALIGN_OVER) * field.cap
 
 
+@pytest.mark.heavy
 def test_a_wall_graded_toward_a_sharp_corner_does_not_set_the_lattice():
     """The 30-60 right triangle at area/500: its longest wall, the
     hypotenuse, is graded toward the 30 degree corner, so the lattice

@@ -291,6 +291,7 @@ def test_the_count_window_holds_the_count():
     assert ops == 0 and len(t) == len(tri)
 
 
+@pytest.mark.heavy
 def test_bm_mesh_repairs_a_hole_close_to_a_wall(monkeypatch):
     """A hole a little more than one element from a wall: bm.mesh's last step
     must leave a better smallest ratio than the mesh without it, a mean

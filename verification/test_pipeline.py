@@ -92,6 +92,7 @@ def _edge_lengths(m):
     return e, np.hypot(*(p[e[:, 0]] - p[e[:, 1]]).T)
 
 
+@pytest.mark.heavy
 def test_constant_size_is_honoured_on_a_corner_only_square():
     h = 0.05
     m = bm.mesh(bm.Domain.from_loops([[(0, 0), (1, 0), (1, 1), (0, 1)]]), size=h)
@@ -100,6 +101,7 @@ def test_constant_size_is_honoured_on_a_corner_only_square():
     assert inside >= 0.95, inside
 
 
+@pytest.mark.heavy
 def test_a_size_function_smaller_in_the_middle_is_honoured():
     def h(xy):
         return 0.03 + 0.12 * np.hypot(xy[:, 0] - 0.5, xy[:, 1] - 0.5)
@@ -199,6 +201,7 @@ def test_paper_mode_is_generate_then_optimize_bit_for_bit():
         bm.mesh(domain, paper=True, size=0.1)
 
 
+@pytest.mark.heavy
 def test_progress_says_each_stage_and_changes_no_bit(capsys):
     """bm.mesh with progress=True writes a line per stage on stderr, the last
     one with the count and the radius ratios' mean and minimum of the mesh it
@@ -319,7 +322,8 @@ def test_a_capped_compass_search_stops_each_star_at_its_cap(loops, seed):
     assert steps[1.0] >= steps[0.0]
 
 
-@pytest.mark.parametrize("case", ["half-disk", "fig3_circle"])
+@pytest.mark.parametrize("case", ["half-disk",
+                                  pytest.param("fig3_circle", marks=pytest.mark.heavy)])
 def test_small_domains_get_the_best_of_three_meshes(case, monkeypatch):
     """bm.mesh with insertion="auto" on a small domain makes three meshes
     (centroid insertion with and without frontal seeds, frontal insertion)
@@ -400,8 +404,8 @@ def test_segments_ulps_apart_do_not_ask_for_a_zero_size():
     assert fuzz.check_against_input(mesh, domain) == ""
 
 
-@pytest.mark.parametrize("seed", [pytest.param(1697, marks=pytest.mark.heavy), 2022,
-                                  pytest.param(2232, marks=pytest.mark.heavy)])
+@pytest.mark.heavy
+@pytest.mark.parametrize("seed", [1697, 2022, 2232])
 def test_far_from_the_origin_no_two_nodes_meet(seed):
     """Fuzz cases offset by 1e6 ... 1e15: the forces moved two nodes onto one
     float position and the re-triangulation failed; now a valid mesh."""
@@ -897,6 +901,7 @@ def test_an_over_full_first_mesh_that_loses_is_made_again_to_the_count(monkeypat
     _fits_the_count_and_beats_gmsh(m, domain, max_area)
 
 
+@pytest.mark.heavy
 def test_a_rescaled_mesh_keeps_the_asked_fields_count_windows(monkeypatch):
     """The comb of nine teeth has its frontal mesh made again on scaled
     sizes; its repairs and balance still aim at the asked field's count (a

@@ -150,6 +150,7 @@ def _ratios(P, T):
     return 16 * area**2 / (a * b * c * (a + b + c))
 
 
+@pytest.mark.heavy
 def test_a_few_free_points_cost_the_mesh_little():
     # a free point's eq. 1-2 bubble spans the distance to its nearest input node,
     # here ten sizes: left in §3, it pushed the lattice around it into clumps and holes
@@ -277,6 +278,7 @@ def test_crossing_loops_are_refused():
         bm.Domain.from_pslg(loops=[SQUARE, SQUARE + 4])
 
 
+@pytest.mark.heavy
 def test_a_vertex_at_the_crossing_splits_both_constraints():
     cross = [[(1, 1), (7, 7)], [(1, 7), (7, 1)]]
     d = bm.Domain.from_pslg(loops=[SQUARE], constraints=cross, points=[(4, 4)])
@@ -313,7 +315,7 @@ def write_square_poly(path, midpoint_first=False):
     path.write_text("\n".join(lines) + "\n")
 
 
-@pytest.mark.parametrize("midpoint_first", [False, True])
+@pytest.mark.parametrize("midpoint_first", [False, pytest.param(True, marks=pytest.mark.heavy)])
 def test_a_vertex_on_a_segment_splits_it_and_keeps_the_marker(tmp_path, midpoint_first):
     path = tmp_path / "split.poly"
     write_square_poly(path, midpoint_first)
@@ -518,6 +520,7 @@ def test_xdmf_facet_tags(tmp_path):
 # --- shapely input and regional sizes ------------------------------------------------
 
 
+@pytest.mark.heavy
 def test_shapely_multipolygon_lines_and_points():
     shapely = pytest.importorskip("shapely")
     two = shapely.MultiPolygon([shapely.box(0, 0, 4, 4), shapely.box(6, 0, 10, 4)])

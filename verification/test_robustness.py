@@ -36,7 +36,8 @@ def _offset_square():
 
 @pytest.mark.parametrize("loops", [pytest.param(_ON_VERTEX["decimal grid"],
                                                 marks=pytest.mark.heavy),
-                                   _ON_VERTEX["sliver"], _offset_square()],
+                                   _ON_VERTEX["sliver"],
+                                   pytest.param(_offset_square(), marks=pytest.mark.heavy)],
                          ids=[*_ON_VERTEX, "offset 1e15"])
 def test_centroids_on_a_vertex_give_a_valid_mesh(loops):
     domain = bm.Domain.from_loops(loops)

@@ -539,7 +539,9 @@ def test_nodes_on_an_odd_number_of_segments_are_refused_by_name():
         verify.check(P[:4], T, S, P[:4], oriented=True)
 
 
-@pytest.mark.parametrize("name", sorted(TOUCHING))
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.heavy)
+                                  if n in ("corner", "hole on the wall") else n
+                                  for n in sorted(TOUCHING)])
 def test_bm_meshes_of_touching_loops_pass_the_check(name):
     """bm.mesh of each touching case (its loops given to Domain.from_pslg in
     the order and direction GEOS's rings of the region's boundary have, not

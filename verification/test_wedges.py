@@ -203,7 +203,8 @@ def _off_corner_minimum(mesh):
 
 
 @pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
-@pytest.mark.parametrize("degrees", [5, 10, 15, 20, 25, 26.5, 27.4, 30, 34, 38])
+@pytest.mark.parametrize("degrees", [10, 15, 20, *(pytest.param(d, marks=pytest.mark.heavy)
+                                                  for d in (5, 25, 26.5, 27.4, 30, 34, 38))])
 # the finer share is minutes as plain Python; the jitted environments run it
 @pytest.mark.parametrize("share", [100, pytest.param(1000, marks=pytest.mark.heavy)])
 def test_meshes_beside_sharp_corners_stay_above_0_7(degrees, share):
@@ -224,6 +225,7 @@ def _ladder_nodes(mesh):
     return np.asarray(domain.points)[free]
 
 
+@pytest.mark.heavy
 @pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
 @pytest.mark.parametrize("degrees", [26.5, 30])
 def test_a_ladder_corner_has_an_isosceles_triangle_and_nodes_on_its_bisector(degrees):
@@ -296,6 +298,7 @@ def _star(tips, degrees):
     return np.array(out)
 
 
+@pytest.mark.heavy
 @pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
 def test_short_tips_keep_the_zigzag_where_a_ladder_would_end_at_their_walls():
     # 40 tips of 30 degrees, 0.23 long, at an h of 0.24: a ladder would stop at the
@@ -318,6 +321,7 @@ def test_a_sampled_shapely_domain_gets_no_ladder_nodes():
     assert near[1] / near[0] == pytest.approx(math.sqrt(float(zigzag_ratio(theta))), rel=1e-6)
 
 
+@pytest.mark.heavy
 @pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
 def test_two_sharp_corners_on_one_wall():
     # a 20-20-140 triangle: the base is graded from both ends, each up to its middle
@@ -330,7 +334,8 @@ def test_two_sharp_corners_on_one_wall():
 
 
 @pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
-@pytest.mark.parametrize("degrees", [4, 6, 8, 12])
+@pytest.mark.parametrize("degrees", [8, *(pytest.param(d, marks=pytest.mark.heavy)
+                                         for d in (4, 6, 12))])
 def test_a_wedge_whose_first_walls_are_short_stays_above_0_7(degrees):
     # the corner's walls bend after 0.5, far shorter than h / (q - 1): the zigzag must
     # run to their ends, where the next walls' feature size takes over
@@ -376,6 +381,7 @@ def _saw(teeth, depth):
     return np.array([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), *top[::-1]])
 
 
+@pytest.mark.heavy
 @pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
 @pytest.mark.parametrize("teeth, depth", [(5, 1.29), (9, 0.67)])
 def test_sharp_teeth_under_a_max_area_get_the_count_their_field_asks_for(teeth, depth):

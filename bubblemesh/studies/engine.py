@@ -51,8 +51,14 @@ class StudyRun:
 def warm_up() -> float:
     """Load (first time: compile) bubblemesh's numba kernels: paper mode twice on a small
     square with a hole (a tiny disk alone left some code paths cold), then ``bubblemesh.mesh``
-    with its defaults.  Returns the seconds taken."""
+    with its defaults.  Returns the seconds taken: 0 where numba is off (NUMBA_DISABLE_JIT),
+    with nothing to compile and the kernels minutes slower as plain Python."""
+    import numba
+
     import bubblemesh as bm
+
+    if numba.config.DISABLE_JIT:  # type: ignore[attr-defined]
+        return 0.0
 
     from .geometry import circle, clockwise, rectangle
 
