@@ -420,17 +420,24 @@ def _finisher(max_area, field):
 
 
 def _mended(mesh, max_area, field):
-    """In a mesh of at most BALANCE_BELOW elements whose smallest ratio is below
-    REPAIR_BELOW, the repair of its worst triangles once more
+    """In a mesh of at most BALANCE_BELOW elements whose smallest ratio off the
+    sharp corners (:func:`sharp_corner_flags`: no repair lifts the triangles
+    there) is below REPAIR_BELOW, the repair of its worst triangles once more
     (:func:`~bubblemesh._patch_repair.repair_worst`, the count within
     REPAIR_WINDOW of the field's, no new triangle below POOR_RATIO), kept where
-    it lifts that smallest ratio: the first repair spent its MEAN_DROP on other
-    patches, and the swaps and removals since changed the worst one's
-    surroundings.  Below MEND_BELOW, where a triangle may hold a whole right
-    angle and only a point inserted splits it, the count may go to MEND_WINDOW."""
+    it lifts that smallest ratio and the smallest of all does not fall (where
+    that is a sharp corner's, which no repair raises, and the one lifted was at
+    least POOR_RATIO, the mean must not fall either): the first repair spent its
+    MEAN_DROP on other patches, and the swaps and removals since changed the
+    worst one's surroundings.  Below MEND_BELOW, where a triangle may hold a
+    whole right angle and only a point inserted splits it, the count may go to
+    MEND_WINDOW."""
     X, T = mesh.points, mesh.triangles
-    before = _smallest_ratio(X, T)
-    if len(T) > BALANCE_BELOW or before >= REPAIR_BELOW:
+    off = ~sharp_corner_flags(mesh.domain, X)[T].any(axis=1)
+    if len(T) > BALANCE_BELOW or not off.any():
+        return mesh
+    least, before = _smallest_ratio(X, T), _smallest_ratio(X, T[off])
+    if before >= REPAIR_BELOW:
         return mesh
     segments = np.asarray(mesh.segments)
     movable = np.arange(len(X)) >= mesh.n_boundary
@@ -443,7 +450,13 @@ def _mended(mesh, max_area, field):
     Y, U, old, taken = repair_worst(X, T, segments, movable, limit, REPAIR_BELOW, REPAIR_OPS,
                                     window, MEAN_HALVINGS, MEAN_STEPS, MEAN_DROP, None, None,
                                     True)
-    if not taken or _smallest_ratio(Y, U) <= before + RISE:
+    off = ~sharp_corner_flags(mesh.domain, Y)[U].any(axis=1)
+    if not taken or _smallest_ratio(Y, U[off]) <= before + RISE or _smallest_ratio(Y, U) < least:
+        return mesh
+    # where a sharp corner holds the minimum, which no mend raises, one that lifts no
+    # triangle from below POOR_RATIO must pay in the mean
+    if least < before and before >= POOR_RATIO and (
+            triangle_quality(Y, U).mean() < triangle_quality(X, T).mean()):
         return mesh
     return _rebuilt(mesh, Y, U, _walled(U, neighbors_of(U), segments, len(Y)), old,
                     mesh.optimization.repairs + taken)

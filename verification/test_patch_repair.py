@@ -985,3 +985,65 @@ def test_a_right_angle_at_a_slots_mouth_is_split_though_the_count_is_near_its_wi
     field = pipeline.size_field(domain, max_area=max_area)
     asked = pipeline.field_count(field, mesh.points, mesh.triangles)
     assert abs(len(mesh.triangles) / asked - 1) <= pipeline.COUNT_TOL
+
+
+@pytest.mark.heavy
+def test_the_last_repair_is_judged_off_the_sharp_corners(monkeypatch):
+    """A unit square with a 6-degree spike on its left side, at area/100:
+    the mesh's minimum is the spike's own triangle (no repair lifts a
+    corner that rules out 0.7).  With the corner (1, 0) left in one
+    triangle (a right angle caps it at 2(sqrt 2 - 1); the flip leaves a
+    poorer one beside it), the last repair must still lift them: judged by
+    the smallest ratio of the triangles touching no sharp corner, which
+    rises past that cap, while the smallest of all does not fall; valid,
+    conforming, boundary nodes in place.  The one lifted is below POOR_RATIO
+    (0.42); were it not, the mend would have to keep the mean too."""
+    loop = np.array([(0, 0), (1, 0), (1, 1), (0, 1), (-10, 0.5)], float)
+    domain = bm.Domain.from_loops([loop])
+    max_area = domain.area / 100
+    field = pipeline.size_field(domain, max_area=max_area)
+    mend = pipeline._mended
+    monkeypatch.setattr(pipeline, "_mended", lambda mesh, max_area, field: mesh)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", bm.QualityWarning)
+        mesh = bm.mesh(domain, max_area=max_area)  # made without the step under test
+    monkeypatch.setattr(pipeline, "_mended", mend)
+    cornered = _one_triangle_corner(mesh, (1.0, 0.0))
+    q = O.radius_ratio_reference(cornered.points, cornered.triangles)
+    sharp = _at_corners_below(domain, cornered, 26.0)
+    bound = 2 * (math.sqrt(2) - 1)
+    assert q[sharp].min() < q[~sharp].min() <= bound + 1e-12  # the premise
+    mended = pipeline._mended(cornered, max_area, field)
+    r = O.radius_ratio_reference(mended.points, mended.triangles)
+    off = ~_at_corners_below(domain, mended, 26.0)
+    assert r[off].min() > bound + 1e-3
+    assert r.min() >= q.min() - 1e-12
+    O.check_valid(mended.points, mended.triangles, mended.neighbors)
+    O.check_conforming(mended.points, mended.triangles, mended.segments, area=domain.area,
+                       rel=1e-9)
+    np.testing.assert_array_equal(mended.points[:mended.n_boundary],
+                                  mesh.points[:mesh.n_boundary])
+    # lifting a triangle that is not below POOR_RATIO, a mend that lowers the mean is
+    # not worth it where the minimum cannot rise: the mesh comes back, or a mean as high
+    monkeypatch.setattr(pipeline, "POOR_RATIO", 0.4)
+    again = pipeline._mended(cornered, max_area, field)
+    mean = O.radius_ratio_reference(again.points, again.triangles).mean()
+    assert again is cornered or mean >= q.mean()
+
+
+def _at_corners_below(domain, mesh, degrees):
+    """Per triangle of ``mesh``: does it touch an input corner whose interior
+    angle (from the loop's two edges, computed here) is below ``degrees``?"""
+    P = np.asarray(domain.points)
+    sharp = []
+    for loop in domain.loops:
+        for k, v in enumerate(loop):
+            a, b = P[loop[k - 1]] - P[v], P[loop[(k + 1) % len(loop)]] - P[v]
+            turn = math.atan2(b[0] * a[1] - b[1] * a[0], (a * b).sum()) % (2 * math.pi)
+            angle = math.degrees(turn)
+            if angle < degrees:
+                sharp.append(P[v])
+    at = np.zeros(len(mesh.points), bool)
+    for c in sharp:
+        at |= (mesh.points == c).all(axis=1)
+    return at[mesh.triangles].any(axis=1)
