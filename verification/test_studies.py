@@ -354,6 +354,21 @@ def test_local_workers_skip_native_destructors_at_exit(tmp_path):
     assert runs["leave"].returncode == 0 and runs["leave"].stdout == "done\n"
 
 
+def test_warm_up_meshes_nothing_where_numba_is_off(monkeypatch):
+    """Where numba is off (NUMBA_DISABLE_JIT) there is nothing to compile, and
+    the warm-up's meshes would take minutes as plain Python: it returns 0
+    without meshing."""
+    import numba
+
+    from bubblemesh.studies import engine
+
+    calls = []
+    monkeypatch.setattr(numba.config, "DISABLE_JIT", True)
+    for name in ("generate", "optimize", "mesh"):
+        monkeypatch.setattr(bm, name, lambda *args, name=name, **kwargs: calls.append(name))
+    assert engine.warm_up() == 0.0 and calls == []
+
+
 @pytest.mark.slow
 def test_a_study_started_by_an_unguarded_script_says_how_to_fix_it(cases_dir, tmp_path):
     """A script that runs a study at import, without ``if __name__ ==
