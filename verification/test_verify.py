@@ -255,6 +255,40 @@ def test_the_check_is_the_same_at_every_scale(scale):
     assert report.of_kind("area")
 
 
+def _far_split_square(offset, turn=0.6):
+    """A square of side 5 turned by ``turn`` radians at ``offset`` from the
+    origin (map coordinates), each side split in thirds at the nearest floats
+    to the exact points (Fraction arithmetic): its 12 boundary nodes, their
+    segments (the 4 input sides), and a fan around its centre."""
+    c, s = np.cos(turn), np.sin(turn)
+    corners = offset + 5.0 * np.array([[0, 0], [c, s], [c - s, s + c], [-s, c]])
+    ring = []
+    for k in range(4):
+        a, b = _F(corners[k]), _F(corners[(k + 1) % 4])
+        ring += [corners[k]] + [[float(a[i] + t * (b[i] - a[i])) for i in (0, 1)]
+                                for t in (Fraction(1, 3), Fraction(2, 3))]
+    pts = np.vstack([np.array(ring), corners.mean(axis=0)])
+    fan = np.array([[k, (k + 1) % 12, 12] for k in range(12)])
+    return pts, fan, corners, np.array([[0, 1], [1, 2], [2, 3], [3, 0]])
+
+
+def test_splits_rounded_to_the_nearest_float_far_from_the_origin_conform():
+    """Map coordinates (1e6 from the origin): a point on a turned segment has
+    no float position, the nearest is an ulp off (checked exactly here), and
+    the check must accept the split and its area as it does Triangle's
+    at the origin; a node 1e-6 of the side off it is still named."""
+    pts, fan, corners, sides = _far_split_square(1e6)
+    off = [v for v in range(12) if v % 3 and _orient(corners[v // 3], corners[(v // 3 + 1) % 4],
+                                                      pts[v]) != 0]
+    assert off, "no split node off its segment: the case tests nothing"
+    report = verify.check(pts, fan, sides, corners, delaunay=False)
+    assert report.ok, report.summary()
+    assert sorted(report.splits) == [0, 1, 2, 3]
+    pts[4] -= 5e-6 * np.array([np.cos(0.6), np.sin(0.6)])  # inward, across side 1
+    report = verify.check(pts, fan, sides, corners, delaunay=False)
+    assert [v.segment for v in report.of_kind("missing_segment")] == [1]
+
+
 def test_a_collinear_triangle_is_a_violation_not_an_unreadable_mesh():
     """One triangle on three collinear nodes, checked against its own boundary
     edges (which then run back over each other): a report naming the zero

@@ -49,7 +49,9 @@ def check(points, triangles, segments=None, boundary_points=None, radii=None, *,
     neighbors (M, 3): an adjacency array to check (neighbors[t, i] across the
     edge opposite vertex i, -1 on the boundary).  oriented: segments run with
     the domain on their left, and the mesh must agree.  split_tol: a mesh node
-    splits a segment if within split_tol * length of it (0: exactly on it).
+    splits a segment if within split_tol * length of it, or a few ulps of its
+    end points' coordinates where that is more (map coordinates far from the
+    origin: :mod:`bubblemesh.verify.conform`; 0: exactly on it).
     allow_splits=False reports every split segment.  delaunay=False skips the
     constrained Delaunay test.  limit: violations kept per kind.
     """

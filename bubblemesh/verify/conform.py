@@ -2,9 +2,11 @@
 
 Supported: each input segment is one mesh edge, or a chain of mesh edges
 through mesh nodes that lie on the segment (a mesher that split it; within
-``split_tol`` of the segment's line, relative to its length; 0 = exactly on
-it).  Splits are reported in ``Report.splits`` (and as violations when not
-allowed).
+``split_tol`` of the segment's line, relative to its length, or SPLIT_ULPS
+units in the last place of its end points' largest coordinate, whichever is
+larger: a point on a slanted segment far from the origin has no float
+position nearer than that; 0 = exactly on it).  Splits are reported in
+``Report.splits`` (and as violations when not allowed).
 """
 
 from __future__ import annotations
@@ -18,6 +20,8 @@ from .domain import Boundary
 from .exact import ExactPoints, orient_int
 from .report import Report
 from .topology import HalfEdges
+
+SPLIT_ULPS = 4  # a split node's float position may be this many ulps off its segment
 
 
 def map_boundary_nodes(points: np.ndarray, boundary_points: np.ndarray, report: Report,
@@ -56,6 +60,7 @@ def _walk(E: ExactPoints, start, nbrs, A, B, tol):
     pts = E.scaled  # times a power of two, so that d @ d neither underflows nor overflows
     d = pts[B] - pts[A]
     L2 = float(d @ d)
+    reach = max(tol * L2, _rounding(pts[[A, B]]) * math.sqrt(L2))  # |cross| = distance * L
     chain, x, t_x = [A], A, 0.0
     for _ in range(len(start)):  # bounded: the parameter grows at every step
         around = nbrs[start[x]:start[x + 1]]
@@ -66,7 +71,7 @@ def _walk(E: ExactPoints, start, nbrs, A, B, tol):
         if tol == 0:
             on = np.array([orient_int(E.P[A], E.P[B], E.P[y]) == 0 for y in around.tolist()])
         else:
-            on = np.abs(rel[:, 0] * d[1] - rel[:, 1] * d[0]) <= tol * L2
+            on = np.abs(rel[:, 0] * d[1] - rel[:, 1] * d[0]) <= reach
         ok = on & (t > t_x) & (t < 1)
         if not ok.any():
             return None
@@ -170,17 +175,28 @@ def locate_centroids(E: ExactPoints, tri: np.ndarray, domain: Boundary, exact=Fa
     return domain.locate(q, exact_centroid, delta, exact=exact)
 
 
+def _rounding(points):
+    """SPLIT_ULPS units in the last place of the largest |coordinate| of ``points``."""
+    return SPLIT_ULPS * float(np.spacing(np.abs(points).max(initial=0.0)))
+
+
 def check_area(E, tri, domain: Boundary, report, rel):
-    """math.fsum of the triangle areas equals the exact domain area within ``rel``,
-    both taken on E's scaled points (a power of two, so the relative error is
-    the same, but no area underflows or overflows); returned at the input's
-    scale, where they may be 0 or inf."""
+    """math.fsum of the triangle areas equals the exact domain area within ``rel``
+    of it plus the area a boundary moved by its nodes' rounding covers
+    (:func:`_rounding` of all points times the boundary's length), both taken
+    on E's scaled points (a power of two, so the relative error is the same,
+    but no area underflows or overflows); returned at the input's scale,
+    where they may be 0 or inf."""
     from .measures import triangle_areas
 
     expected = float(domain.area_exact() * Fraction(1, 1 << (2 * E.shift))
                      * Fraction(2) ** (-2 * E.exponent))
     total = math.fsum(triangle_areas(E.scaled, tri).tolist())
-    err = abs(total - expected) / abs(expected) if expected else abs(total)
+    ends = E.scaled[domain.segments]
+    length = math.fsum(np.hypot(*(ends[:, 1] - ends[:, 0]).T).tolist())
+    slack = _rounding(E.scaled) * length
+    err = (max(abs(total - expected) - slack, 0.0) / abs(expected) if expected
+           else abs(total))
     with np.errstate(over="ignore"):
         total, expected = (float(np.ldexp(v, 2 * E.exponent)) for v in (total, expected))
     if not err <= rel:
