@@ -397,24 +397,27 @@ class Domain:
         return _with_file_markers(domain, chains, poly)
 
     def to_poly(self, path: str | Path) -> None:
-        """Write the domain as a Triangle ``.poly`` file with a holes section.
+        """Write the domain as a Triangle ``.poly`` file that reads back as it.
 
-        Vertices are numbered from 1; each vertex and segment carries its loop
-        number plus one as boundary marker.
+        Vertices are numbered from 1.  Each segment carries its marker
+        (:attr:`markers`), an interior constraint once; each vertex the marker
+        of its first segment, as Triangle gives a vertex on a segment, and a
+        free point 0.  Hole points, and the regions when there are any, follow.
         """
         from bubblemesh.io import write_poly
 
-        loop_of_node = np.empty(len(self.points), dtype=np.int64)
-        for k, index in enumerate(self.loops):
-            loop_of_node[index] = k + 1
-        write_poly(
-            path,
-            self.points,
-            self.segments,
-            self.hole_points,
-            vertex_markers=loop_of_node,
-            segment_markers=loop_of_node[self.segments[:, 0]],
-        )
+        segments = np.asarray(self.segments)
+        markers = np.asarray(self.markers)
+        key = np.minimum(segments[:, 0], segments[:, 1]) * len(self.points) + np.maximum(
+            segments[:, 0], segments[:, 1])
+        _, first = np.unique(key, return_index=True)  # a constraint's two ways once
+        once = np.sort(first)
+        vertex_markers = np.zeros(len(self.points), np.int64)
+        nodes, at = np.unique(segments[once].ravel(), return_index=True)  # first segment of each
+        vertex_markers[nodes] = np.repeat(markers[once], 2)[at]
+        write_poly(path, self.points, segments[once], self.hole_points,
+                   vertex_markers=vertex_markers, segment_markers=markers[once],
+                   regions=self.regions)
 
     @classmethod
     def from_shapely(cls, polygon, spacing: float | None = None, *, size=None,

@@ -293,8 +293,11 @@ def write_poly(
     *,
     vertex_markers: np.ndarray | None = None,
     segment_markers: np.ndarray | None = None,
+    regions: np.ndarray | None = None,
 ) -> None:
-    """Write a Triangle ``.poly`` file, vertices numbered from 1.
+    """Write a Triangle ``.poly`` file, vertices numbered from 1, with a
+    regions section (x, y, attribute, max_area per row) when ``regions`` has
+    rows.
 
     Coordinates are written with ``repr`` so they read back bit for bit.
     """
@@ -315,6 +318,10 @@ def write_poly(
     out.append(f"{len(holes)}")
     for h, (x, y) in enumerate(holes.tolist()):
         out.append(f"{h + 1} {x!r} {y!r}")
+    rows = np.empty((0, 4)) if regions is None else np.asarray(regions, np.float64).reshape(-1, 4)
+    if len(rows):
+        out.append(f"{len(rows)}")
+        out += [f"{r + 1} {x!r} {y!r} {a!r} {m!r}" for r, (x, y, a, m) in enumerate(rows.tolist())]
     Path(path).write_text("\n".join(out) + "\n")
 
 

@@ -13,6 +13,7 @@ import re
 import sys
 from decimal import Decimal
 from fractions import Fraction
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -1006,6 +1007,61 @@ def test_poly_round_trip_is_exact(tmp_path_factory, case):
     np.testing.assert_array_equal(again.segments, domain.segments)
     np.testing.assert_array_equal(again.hole_points, domain.hole_points)
     assert again.area == domain.area
+
+
+def _segment_set(domain):
+    """{((a, b), marker)} of a domain's segments, by node coordinates."""
+    P = np.asarray(domain.points).tolist()
+    return {((tuple(P[a]), tuple(P[b])), int(m))
+            for (a, b), m in zip(np.asarray(domain.segments).tolist(), domain.markers.tolist())}
+
+
+def _assert_poly_keeps(domain, path):
+    """``domain`` written to ``path`` reads back with the same nodes, holes,
+    regions and area, the same segments with the same markers, and as
+    Triangle's own reader sees the file: each undirected segment once,
+    vertex markers 0 exactly on the nodes of no segment, else one of the
+    markers of their segments."""
+    triangle = pytest.importorskip("triangle")
+    domain.to_poly(path)
+    again = Domain.from_poly(path)
+    np.testing.assert_array_equal(again.points, domain.points)
+    np.testing.assert_array_equal(again.hole_points, domain.hole_points)
+    assert again.area == domain.area
+    assert _segment_set(again) == _segment_set(domain)
+    if domain.regions is None:
+        assert again.regions is None
+    else:
+        np.testing.assert_array_equal(again.regions, domain.regions)
+    read = triangle.load(str(path.parent), path.stem)
+    pairs = np.sort(read["segments"], axis=1)
+    assert len(np.unique(pairs, axis=0)) == len(pairs)
+    assert {tuple(p) for p in pairs.tolist()} == {
+        tuple(sorted(s)) for s in np.asarray(domain.segments).tolist()}
+    marks = read["vertex_markers"].ravel()
+    for v in range(len(domain.points)):
+        on = [int(m) for s, m in zip(np.asarray(domain.segments).tolist(),
+                                     domain.markers.tolist()) if v in s]
+        assert (marks[v] in on) if on else marks[v] == 0, (v, marks[v], on)
+
+
+@pytest.mark.parametrize("name", ["la", "box.2", "face", "double_hex3"])
+def test_poly_round_trip_keeps_constraints_markers_regions_and_free_points(tmp_path, name):
+    """Triangle's examples: interior constraints (la, double_hex3), regions
+    with areas (la), free points (box.2), markers (face).  The file's own
+    markers and regions were lost before and free points got stray markers."""
+    triangle = pytest.importorskip("triangle")
+    source = Path(triangle.__file__).parent / "data" / f"{name}.poly"
+    _assert_poly_keeps(Domain.from_poly(source), tmp_path / "out.poly")
+
+
+def test_poly_round_trip_of_a_pslg_with_every_kind_of_item(tmp_path):
+    """A constraint, a free point, a region with an area bound and markers
+    of the user's own: all read back as given."""
+    domain = Domain.from_pslg(loops=[[(0, 0), (4, 0), (4, 2), (0, 2)]],
+                              constraints=[[(2, 0), (2, 2)]], points=[(1, 1)],
+                              markers=[7, 9], regions=[(3, 1, 2.0, 0.05)])
+    _assert_poly_keeps(domain, tmp_path / "pslg.poly")
 
 
 # --- shapely ----------------------------------------------------------------------------
