@@ -380,6 +380,8 @@ class Domain:
         supported).
         """
         chains = _chain_segments(poly.segments, poly.vertices, poly.first_index)
+        if any(len(np.unique(chain)) < 3 for chain in chains):  # a segment given both ways
+            raise GeometryError(f"{path}: segments must form closed loops of 3 nodes or more")
         offsets = np.cumsum([0] + [len(chain) for chain in chains])
         areas = _loop_areas(poly.vertices[np.concatenate(chains)], offsets)
         outer = int(np.argmax(areas))

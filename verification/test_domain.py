@@ -1055,6 +1055,27 @@ def test_poly_round_trip_keeps_constraints_markers_regions_and_free_points(tmp_p
     _assert_poly_keeps(Domain.from_poly(source), tmp_path / "out.poly")
 
 
+def test_a_poly_segment_given_both_ways_reads_as_triangle_reads_it(tmp_path):
+    """A crack inside a 4 x 4 square written as 5 -> 6 and 6 -> 5 (as
+    bubblemesh itself wrote constraints before): Triangle meshes it as one
+    constraint; it was refused as a loop of 2 nodes."""
+    triangle = pytest.importorskip("triangle")
+    path = tmp_path / "twice.poly"
+    path.write_text("6 2 0 0\n1 0 0\n2 4 0\n3 4 4\n4 0 4\n5 1 2\n6 3 2\n"
+                    "6 0\n1 1 2\n2 2 3\n3 3 4\n4 4 1\n5 5 6\n6 6 5\n0\n")
+    domain = Domain.from_poly(path)
+    file_points = [(0, 0), (4, 0), (4, 4), (0, 4), (1, 2), (3, 2)]
+    assert sorted(map(tuple, domain.points.tolist())) == sorted(file_points)
+    crack = {(1.0, 2.0), (3.0, 2.0)}
+    inner = [{tuple(domain.points[a]), tuple(domain.points[b])}
+             for (a, b), i in zip(domain.segments.tolist(), domain.interior) if i]
+    assert inner == [crack, crack] and domain.area == 16.0
+    mesh = triangle.triangulate(triangle.load(str(tmp_path), "twice"), "p")
+    P, T = mesh["vertices"], mesh["triangles"]
+    edges = [{tuple(P[a]), tuple(P[b])} for t in T.tolist() for a, b in zip(t, t[1:] + t[:1])]
+    assert edges.count(crack) == 2  # Triangle's reading: one constraint, a triangle each side
+
+
 def test_poly_round_trip_of_a_pslg_with_every_kind_of_item(tmp_path):
     """A constraint, a free point, a region with an area bound and markers
     of the user's own: all read back as given."""
