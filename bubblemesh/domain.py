@@ -410,9 +410,8 @@ class Domain:
 
         segments = np.asarray(self.segments)
         markers = np.asarray(self.markers)
-        key = np.minimum(segments[:, 0], segments[:, 1]) * len(self.points) + np.maximum(
-            segments[:, 0], segments[:, 1])
-        _, first = np.unique(key, return_index=True)  # a constraint's two ways once
+        # a constraint (both ways in segments) once
+        _, first = np.unique(np.sort(segments, axis=1), axis=0, return_index=True)
         once = np.sort(first)
         vertex_markers = np.zeros(len(self.points), np.int64)
         nodes, at = np.unique(segments[once].ravel(), return_index=True)  # first segment of each

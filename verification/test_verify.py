@@ -255,7 +255,7 @@ def test_the_check_is_the_same_at_every_scale(scale):
     assert report.of_kind("area")
 
 
-def _far_split_square(offset, turn=0.6):
+def _far_split_square(offset, turn):
     """A square of side 5 turned by ``turn`` radians at ``offset`` from the
     origin (map coordinates), each side split in thirds at the nearest floats
     to the exact points (Fraction arithmetic): its 12 boundary nodes, their
@@ -276,15 +276,16 @@ def test_splits_rounded_to_the_nearest_float_far_from_the_origin_conform():
     """Map coordinates (1e6 from the origin): a point on a turned segment has
     no float position, the nearest is an ulp off (checked exactly here), and
     the check must accept the split and its area as it does Triangle's
-    at the origin; a node 1e-6 of the side off it is still named."""
-    pts, fan, corners, sides = _far_split_square(1e6)
+    at the origin; a node 5e-6 inside its side is still named."""
+    turn = 0.6
+    pts, fan, corners, sides = _far_split_square(1e6, turn)
     off = [v for v in range(12) if v % 3 and _orient(corners[v // 3], corners[(v // 3 + 1) % 4],
                                                       pts[v]) != 0]
     assert off, "no split node off its segment: the case tests nothing"
     report = verify.check(pts, fan, sides, corners, delaunay=False)
     assert report.ok, report.summary()
     assert sorted(report.splits) == [0, 1, 2, 3]
-    pts[4] -= 5e-6 * np.array([np.cos(0.6), np.sin(0.6)])  # inward, across side 1
+    pts[4] -= 5e-6 * np.array([np.cos(turn), np.sin(turn)])  # inward, across side 1
     report = verify.check(pts, fan, sides, corners, delaunay=False)
     assert [v.segment for v in report.of_kind("missing_segment")] == [1]
 
