@@ -18,7 +18,10 @@ Families (every draw from one ``numpy`` generator seeded with ``--seed``):
 - ``sharp``: corner-only stars of 4-12 spikes, saw-tooth combs of 3-9 teeth
   (5-20 degrees) on a square, and NACA 00xx airfoils with a sharp trailing
   edge (20-120 nodes, cosine spaced) turned up to 17 degrees in a box; meshed
-  with max_area = area / 100-1000.
+  with max_area = area / 100-1000;
+- ``needles``: a corner of 0.3-3 degrees: sliver triangles, a spike on a
+  square, crescents (two cusps, arcs of 30-80 nodes); meshed with max_area =
+  area / 30-1000.
 
 The rows are :func:`bubblemesh.studies.quality.case_rows`; prints each case
 and the targets bm misses, and writes <family>_vs_gmsh.csv to ``--out``.
@@ -161,7 +164,56 @@ def sharp(n, seed):
                {"max_area": domain.area / int(rng.integers(100, 1000))})
 
 
-FAMILIES = {"plates": plates, "graded": graded, "narrow": narrow, "sharp": sharp}
+def _sliver(rng, tip):
+    """A triangle with a corner of ``tip`` radians at the origin, its walls 1-4
+    long."""
+    a, b = rng.uniform(1, 4, 2)
+    return [np.array([(0.0, 0.0), (a, 0.0), (b * np.cos(tip), b * np.sin(tip))])]
+
+
+def _spike(rng, tip):
+    """A unit square with a spike of angle ``tip`` on its top, 1-3 long."""
+    length, x = rng.uniform(1, 3), rng.uniform(0.3, 0.7)
+    half = length * np.tan(tip / 2)
+    return [np.array([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (x + half, 1.0),
+                      (x, 1.0 + length), (x - half, 1.0), (0.0, 1.0)])]
+
+
+def _crescent(rng, tip):
+    """The unit disk less a disk of radius 0.5-0.9 that cuts its circle at the
+    angle ``tip``: two cusps of about that angle, 30-80 nodes on each arc,
+    cosine-spaced so that the chords at a cusp nearly keep its angle."""
+    r = rng.uniform(0.5, 0.9)
+    d = np.sqrt(1 + r * r - 2 * r * np.cos(tip))
+    x = (1 + d * d - r * r) / (2 * d)  # the circles meet at (x, +-y)
+    y = np.sqrt(1 - x * x)
+    outer, inner = (int(k) for k in rng.integers(30, 81, 2))
+
+    def spaced(start, nodes):
+        s = 0.5 * (1 - np.cos(np.linspace(0, np.pi, nodes + 1)))
+        return start + (2 * np.pi - 2 * start) * s
+
+    big, small = spaced(np.arctan2(y, x), outer), spaced(np.arctan2(y, x - d), inner)
+    arc = np.column_stack([np.cos(big), np.sin(big)])
+    cut = np.column_stack([d + r * np.cos(small[::-1]), r * np.sin(small[::-1])])
+    return [np.vstack([arc, cut[1:-1]])]
+
+
+def needles(n, seed):
+    """(name, domain, bm.mesh keywords) for ``n`` domains with a needle: a
+    corner of 0.3-3 degrees (a sliver triangle, a spike on a square, a
+    crescent's two cusps)."""
+    rng = np.random.default_rng(seed)
+    for i in range(n):
+        kind, tip = int(rng.integers(3)), np.radians(rng.uniform(0.3, 3.0))
+        loops = (_sliver, _spike, _crescent)[kind](rng, tip)
+        domain = bm.Domain.from_loops(loops)
+        yield (f"{('sliver', 'spike', 'crescent')[kind]} {seed}.{i}", domain,
+               {"max_area": domain.area / int(rng.integers(30, 1000))})
+
+
+FAMILIES = {"plates": plates, "graded": graded, "narrow": narrow, "sharp": sharp,
+            "needles": needles}
 
 
 def sweep(family, n, seed, out_dir=None):
