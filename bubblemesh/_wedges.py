@@ -18,10 +18,12 @@ wall graded from both ends, else where its next node would leave the wall;
 but where the wall goes on nearly straight past its end (it turns by at most
 ONWARD there), at the node from which that end is nearest q times as far, in
 ratio (at least sqrt(q) times): the end stands in for the next node, and the
-strip runs on.  The field splits the rest.  Needles (corners under NEEDLE) are
-left alone: their progression would take more than MAX_PER_WALL nodes of
-nearly one position.  Concentric shells around small input angles play the
-same part in Ruppert-type refinement.
+strip runs on.  The field splits the rest.  A corner of a few degrees or
+less takes many nodes, all of them well shaped (q - 1 is about theta: some
+190 on each wall at 1 degree); the field follows them (:func:`wedge_sources`).
+Needles (corners under NEEDLE) are left alone: their progression would take
+more than MAX_PER_WALL nodes.  Concentric shells around small input angles
+play the same part in Ruppert-type refinement.
 
 From SHARP_ANGLE to about 33 degrees the zigzag's corner triangle (legs r and
 r sqrt(q)) stays below 0.7 (0.59 at 26.5 degrees), or meets it only with the
@@ -51,11 +53,11 @@ from bubblemesh.quality import radius_ratio
 __all__ = ["corner_angles", "best_corner_ratio", "zigzag_ratio", "ladder_parameters",
            "wedge_parameters", "wedge_sources", "ladder_points", "SHARP_ANGLE"]
 
-MAX_PER_WALL = 64  # graded nodes at most on one wall beside one corner
+MAX_PER_WALL = 1024  # graded nodes at most on one wall beside one corner
 CLEARANCE_BLOCK = 1 << 20  # corner-segment pairs per block of a ladder's clearance
 LADDER_WIDTH = 1.3  # a ladder runs on while the wedge is narrower than this times the size
 LADDER_TOP = math.radians(40.0)  # the ladder's table spans SHARP_ANGLE to this
-NEEDLE = math.radians(3.0)  # sharper corners are needles: a progression would crowd them
+NEEDLE = math.radians(0.3)  # sharper corners are needles: a progression would crowd them
 ONWARD = math.radians(30.0)  # a wall whose far end turns by at most this goes on past it
 _GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
 
@@ -237,9 +239,9 @@ class _Walls(NamedTuple):
     """The graded walls of :func:`_progressions`, one row per wall end at a
     corner: its segment, whether the corner is the segment's start, the
     corner's node id and position, the vector from it along the wall, whether
-    the corner gets a ladder, the progression's ratio, and per node (MAX_PER_WALL
-    columns) its parameter u on the segment from the corner, the mask of those
-    kept, its position, its distance and its spacing."""
+    the corner gets a ladder, the progression's ratio, and per node (a column
+    each, up to MAX_PER_WALL) its parameter u on the segment from the corner,
+    the mask of those kept, its position, its distance and its spacing."""
 
     seg: np.ndarray
     at_start: np.ndarray
@@ -319,7 +321,9 @@ def _graded(theta, size, below, node, far, corner, away, ladder, clearance):
     r = np.full(at.max(initial=-1) + 1, np.inf)
     np.minimum.at(r, at, first)
     r = r[at]
-    k = np.arange(MAX_PER_WALL)
+    # as many columns as the longest progression can use: one node past its wall's end
+    steps = np.log(np.maximum(length / r, 1.0)) / np.log(q) if len(r) else np.zeros(1)
+    k = np.arange(min(MAX_PER_WALL, int(steps.max()) + 2))
     dist = r[:, None] * q[:, None] ** (k[None, :] + offset[:, None])
     u = dist / length[:, None]
     where = corner[:, None, :] + u[:, :, None] * away[:, None, :]
@@ -338,13 +342,13 @@ def _graded(theta, size, below, node, far, corner, away, ladder, clearance):
     if ladder.any():
         fits = _ladder_fits(fits, ladder, at, dist, clearance)
     count = fits.sum(axis=1)
-    after = np.minimum(count, MAX_PER_WALL - 1)[:, None]
+    after = np.minimum(count, len(k) - 1)[:, None]
     # closed: the next node would pass a wall's far end (not the middle of a wall the
     # other corner grades too) or the clearance
     middle = shared[:, None] & (u > 0.5)
     beyond = dist >= clearance[:, None]
     closed = ~middle & ((u * last > 1.0) | beyond)
-    open_end = (count == MAX_PER_WALL) | ~np.take_along_axis(closed, after, axis=1)[:, 0]
+    open_end = (count == len(k)) | ~np.take_along_axis(closed, after, axis=1)[:, 0]
     # a ladder of two layers or more whose first node not kept lies on its wall where
     # the wedge is wide stops where the wedge widens, though its wall ends a layer later
     widened = ~middle & ((u > 1.0) | (wide <= h) | beyond)

@@ -130,7 +130,7 @@ def _expected_distances(theta, h, length, offset, ladders):
 # (at 27 and 30 degrees a ladder's in-phase walls only if asked for)
 @pytest.mark.parametrize("ladders", [True, False])
 @pytest.mark.parametrize("length", [3.0, 1.0])
-@pytest.mark.parametrize("degrees", [5, 12, 20, 27, 30, 38])
+@pytest.mark.parametrize("degrees", [1, 2, 5, 12, 20, 27, 30, 38])
 def test_walls_of_a_sharp_corner_are_graded_by_the_rule(degrees, length, ladders):
     theta, h = math.radians(degrees), 0.1
     loops = _kite(theta, length)
@@ -148,7 +148,8 @@ def test_walls_of_a_sharp_corner_are_graded_by_the_rule(degrees, length, ladders
     for wall, want in zip(got, expected):
         # placement may round t to 20 bits for a node exactly on the segment
         np.testing.assert_allclose(wall[:len(want)], want, rtol=0, atol=2.0**-21 * length)
-        assert np.diff(wall[len(want) - 1:]).max() <= 1.2 * h  # then the field's pieces
+        # then the field's pieces, if any (at 1 and 2 degrees the zigzag runs to the end)
+        assert np.diff(wall[len(want) - 1:]).max(initial=0.0) <= 1.2 * h
 
 
 def test_short_walls_each_get_their_first_node():
@@ -204,7 +205,7 @@ def _off_corner_minimum(mesh):
 
 @pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
 @pytest.mark.parametrize("degrees", [10, 15, 20, *(pytest.param(d, marks=pytest.mark.heavy)
-                                                  for d in (5, 25, 26.5, 27.4, 30, 34, 38))])
+                                                  for d in (1, 2, 5, 25, 26.5, 27.4, 30, 34, 38))])
 # the finer share is minutes as plain Python; the jitted environments run it
 @pytest.mark.parametrize("share", [100, pytest.param(1000, marks=pytest.mark.heavy)])
 def test_meshes_beside_sharp_corners_stay_above_0_7(degrees, share):
