@@ -419,11 +419,7 @@ def ladder_points(domain: Domain, size, below) -> np.ndarray:
     if not len(rows):
         return np.zeros((0, 2))
     rows = rows[np.unique(w.node[rows], return_index=True)[1]]  # one wall per corner
-    unit = w.away / np.hypot(*w.away.T)[:, None]
-    other = np.array([np.flatnonzero(w.ladder & (w.node == w.node[i]) & (
-        np.abs(unit - unit[i]).sum(axis=1) > 0))[0] for i in rows])
-    bisector = unit[rows] + unit[other]
-    bisector /= np.hypot(*bisector.T)[:, None]
+    bisector = _bisectors(w.node, w.away)[0][rows]  # a ladder's corner has two walls
     half = 0.5 * theta[w.node[rows]]
     g, t, _ = ladder_parameters(theta[w.node[rows]])
     layers = np.maximum(w.fits[rows].sum(axis=1) - 1, 0)
@@ -478,10 +474,13 @@ def wedge_sources(domain: Domain, size, below, outer_below=None):
     """The graded nodes of ``domain``'s walls (where :func:`wedge_parameters`
     puts them) and their spacing (q - 1) times the distance to the corner:
     size sources that make the field follow the zigzag, so the element bubbles
-    there (eq. 3-4) are the zigzag's and not the far larger field's.  With
-    ``outer_below`` only those beside corners sharper than it on the
-    boundary's walls, not on interior constraints (whose other side they
-    would refine too)."""
+    there (eq. 3-4) are the zigzag's and not the far larger field's.  At a
+    corner of two walls the same spacings also lie on its bisector, level
+    with each node: else the field inside the wedge is a wall's spacing grown
+    by the gradation over half the wedge's width, and its integral asks for
+    fewer triangles than the zigzag holds.  With ``outer_below`` only those
+    beside corners sharper than it on the boundary's walls, not on interior
+    constraints (whose other side they would refine too)."""
     node_a, node_b = _segment_nodes(domain)
     P = np.asarray(domain.points)
     theta = corner_angles(domain)
@@ -491,4 +490,22 @@ def wedge_sources(domain: Domain, size, below, outer_below=None):
     if outer_below is not None:
         kept = ~np.asarray(domain.interior, bool)[w.seg] & (theta[w.node] < outer_below)
         fits = fits & kept[:, None]
-    return w.where[fits], w.spacing[fits]
+    bisector, two = _bisectors(w.node, w.away)
+    level = w.dist * np.cos(0.5 * theta[w.node])[:, None]
+    axis = w.corner[:, None, :] + level[:, :, None] * bisector[:, None, :]
+    on = fits & two[:, None]
+    return (np.vstack([w.where[fits], axis[on]]),
+            np.concatenate([w.spacing[fits], w.spacing[on]]))
+
+
+def _bisectors(node, away):
+    """Per wall end: the unit bisector of its corner's walls, and whether the
+    corner has exactly two walls (elsewhere the bisector is meaningless)."""
+    if not len(node):
+        return np.zeros((0, 2)), np.zeros(0, bool)
+    at = np.unique(node, return_inverse=True)[1]
+    total = np.zeros((at.max() + 1, 2))
+    np.add.at(total, at, away / np.hypot(*away.T)[:, None])
+    length = np.hypot(*total.T)
+    two = (np.bincount(at) == 2) & (length > 0)
+    return total[at] / np.where(two, length, 1.0)[at][:, None], two[at]

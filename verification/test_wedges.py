@@ -152,6 +152,28 @@ def test_walls_of_a_sharp_corner_are_graded_by_the_rule(degrees, length, ladders
         assert np.diff(wall[len(want) - 1:]).max(initial=0.0) <= 1.2 * h
 
 
+@pytest.mark.parametrize("degrees", [1, 10, 20])
+def test_the_field_inside_a_wedge_is_its_walls_spacing(degrees):
+    """Inside the wedge, on the corner's bisector level with each graded node
+    (distance d from the corner, rebuilt by the rule), the field is no larger
+    than the zigzag's spacing (q - 1) d: the walls' sources alone would let it
+    grow by the gradation over half the wedge's width, and the field's
+    integral would ask for fewer triangles than the zigzag holds.  (Under a
+    size cap, as here, only corners sharper than SHARP_ANGLE have sources;
+    the rebuilt distances match the nodes' to 2e-7.)"""
+    from bubblemesh.pipeline import size_field
+
+    theta, h = math.radians(degrees), 0.1
+    domain = bm.Domain.from_loops(_kite(theta))
+    field = size_field(domain, size=h)
+    q = float(zigzag_ratio(theta))
+    d = np.concatenate([_expected_distances(theta, h, 3.0, s, False) for s in (0.0, 0.5)])
+    assert len(d) >= 2
+    half = theta / 2
+    axis = (d * math.cos(half))[:, None] * np.array([math.cos(half), math.sin(half)])
+    assert np.all(field(axis) <= (q - 1) * d * (1 + 1e-5))
+
+
 def test_short_walls_each_get_their_first_node():
     # walls cut at 0.1 by the input next to a 36-degree corner, h = 0.05: the
     # half-step wall's first node must fit in its first half too, so r shrinks
