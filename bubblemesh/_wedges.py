@@ -53,11 +53,11 @@ from bubblemesh.quality import radius_ratio
 __all__ = ["corner_angles", "best_corner_ratio", "zigzag_ratio", "ladder_parameters",
            "wedge_parameters", "wedge_sources", "ladder_points", "SHARP_ANGLE"]
 
-MAX_PER_WALL = 1024  # graded nodes at most on one wall beside one corner
+MAX_PER_WALL = 4096  # graded nodes at most on one wall beside one corner
 CLEARANCE_BLOCK = 1 << 20  # corner-segment pairs per block of a ladder's clearance
 LADDER_WIDTH = 1.3  # a ladder runs on while the wedge is narrower than this times the size
 LADDER_TOP = math.radians(40.0)  # the ladder's table spans SHARP_ANGLE to this
-NEEDLE = math.radians(0.3)  # sharper corners are needles: a progression would crowd them
+NEEDLE = math.radians(0.1)  # sharper corners are needles: a progression would crowd them
 ONWARD = math.radians(30.0)  # a wall whose far end turns by at most this goes on past it
 _GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
 

@@ -130,7 +130,7 @@ def _expected_distances(theta, h, length, offset, ladders):
 # (at 27 and 30 degrees a ladder's in-phase walls only if asked for)
 @pytest.mark.parametrize("ladders", [True, False])
 @pytest.mark.parametrize("length", [3.0, 1.0])
-@pytest.mark.parametrize("degrees", [1, 2, 5, 12, 20, 27, 30, 38])
+@pytest.mark.parametrize("degrees", [0.2, 1, 2, 5, 12, 20, 27, 30, 38])
 def test_walls_of_a_sharp_corner_are_graded_by_the_rule(degrees, length, ladders):
     theta, h = math.radians(degrees), 0.1
     loops = _kite(theta, length)
@@ -226,8 +226,8 @@ def _off_corner_minimum(mesh):
 
 
 @pytest.mark.filterwarnings("ignore::bubblemesh.pipeline.QualityWarning")
-@pytest.mark.parametrize("degrees", [10, 15, 20, *(pytest.param(d, marks=pytest.mark.heavy)
-                                                  for d in (1, 2, 5, 25, 26.5, 27.4, 30, 34, 38))])
+@pytest.mark.parametrize("degrees", [10, 15, 20, *(
+    pytest.param(d, marks=pytest.mark.heavy) for d in (0.2, 1, 2, 5, 25, 26.5, 27.4, 30, 34, 38))])
 # the finer share is minutes as plain Python; the jitted environments run it
 @pytest.mark.parametrize("share", [100, pytest.param(1000, marks=pytest.mark.heavy)])
 def test_meshes_beside_sharp_corners_stay_above_0_7(degrees, share):
