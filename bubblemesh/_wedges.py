@@ -9,12 +9,14 @@ Here the nodes on a wall beside such a corner lie at distances r q^(k + s)
 (k = 0, 1, ...) from it, with s = 0 on one wall and s = 1/2 on the other, so the
 wedge fills with a zigzag of similar triangles, each with one edge on a wall
 and its apex on the other.  r is the size at the corner (less where a wall is
-so short that its first node would not fit in its first half), so the
+so short that its first node would not fit in its first half, or its share), so the
 corner's own triangle has legs r and r sqrt(q).  q maximises the zigzag's radius ratio
 (eq. 10: 0.97 at 20 degrees) and, where an isosceles corner triangle could
 reach 0.7 (SHARP_ANGLE and up), the corner triangle's too.  The progression
-stops where its spacing would exceed the size field, or at the middle of a
-wall graded from both ends, else where its next node would leave the wall;
+stops where its spacing would exceed the size field, or on a wall graded
+from both ends where the two spacings meet (the middle between like corners,
+the strip's widest point in a sliver triangle), else where its next node
+would leave the wall;
 but where the wall goes on nearly straight past its end (it turns by at most
 ONWARD there), at the node from which that end is nearest q times as far, in
 ratio (at least sqrt(q) times): the end stands in for the next node, and the
@@ -297,24 +299,30 @@ def _graded(theta, size, below, node, far, corner, away, ladder, clearance):
     """The rest of :class:`_Walls` for the wall ends of :func:`_progressions`
     (``away`` from the corner along the wall), with the ``ladder`` mask, and
     per wall end whether it ends open: its first node not kept short of the
-    clearance, with room for a piece past it on the wall (or past the middle
+    clearance, with room for a piece past it on the wall (or past the split
     of a wall graded from both ends), or, for a ladder of at least two
     layers, on the wall where the wedge is wider than LADDER_WIDTH times the
     size."""
     length = np.hypot(away[:, 0], away[:, 1])
-    # a wall graded from both ends is shared at its middle; else the progression may run
-    # on while its next node still lies on the wall
+    # a wall graded from both ends is shared where the two progressions' spacings meet
+    # (the middle if its corners are alike), so the strip between them widens to there
+    # and not past it; else the progression may run on while its next node is on the wall
     shared = (theta[far] < below) & (theta[far] >= NEEDLE)
+    zigzag = zigzag_ratio(theta[node])
+    split = np.ones(len(node))
+    theirs = zigzag_ratio(theta[far[shared]]) - 1.0
+    split[shared] = theirs / (zigzag[shared] - 1.0 + theirs)
     # the walls at a corner alternate by direction: the zigzag's half-step offset
     order = np.lexsort((np.arctan2(away[:, 1], away[:, 0]), node))
     first = np.searchsorted(node[order], node[order], side="left")
     offset = np.empty(len(node))
     offset[order] = 0.5 * ((np.arange(len(node)) - first) % 2)
     offset[ladder] = 0.0
-    q = np.where(ladder, ladder_parameters(theta[node])[0], zigzag_ratio(theta[node]))
+    q = np.where(ladder, ladder_parameters(theta[node])[0], zigzag)
     # the corner's r: its size, but small enough that every wall there gets its first node
     # (and a ladder its first layer)
-    first = np.minimum(0.5 * length / q**offset, np.where(ladder, clearance / q**2, np.inf))
+    first = np.minimum(np.minimum(split, 0.5) * length / q**offset,
+                       np.where(ladder, clearance / q**2, np.inf))
     if len(corner):
         first = np.minimum(first, size(corner))
     at = np.unique(node, return_inverse=True)[1]
@@ -333,7 +341,7 @@ def _graded(theta, size, below, node, far, corner, away, ladder, clearance):
     # wall that ends at a corner (the short piece would crowd it), keep a whole step
     onward = ~ladder & (np.abs(theta[far] - np.pi) <= ONWARD)
     last = np.where(onward, np.sqrt(q), q)[:, None]
-    inside = np.where(shared[:, None], u <= 0.5, u * last <= 1.0)
+    inside = np.where(shared[:, None], u <= split[:, None], u * last <= 1.0)
     # a zigzag runs while its spacing is below the field's size, a ladder while the
     # wedge is narrower than LADDER_WIDTH times it
     wide = np.where(ladder[:, None], 2.0 * np.sin(0.5 * theta[node])[:, None] / LADDER_WIDTH,
@@ -343,9 +351,9 @@ def _graded(theta, size, below, node, far, corner, away, ladder, clearance):
         fits = _ladder_fits(fits, ladder, at, dist, clearance)
     count = fits.sum(axis=1)
     after = np.minimum(count, len(k) - 1)[:, None]
-    # closed: the next node would pass a wall's far end (not the middle of a wall the
+    # closed: the next node would pass a wall's far end (not the split of a wall the
     # other corner grades too) or the clearance
-    middle = shared[:, None] & (u > 0.5)
+    middle = shared[:, None] & (u > split[:, None])
     beyond = dist >= clearance[:, None]
     closed = ~middle & ((u * last > 1.0) | beyond)
     open_end = (count == len(k)) | ~np.take_along_axis(closed, after, axis=1)[:, 0]

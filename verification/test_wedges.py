@@ -174,6 +174,29 @@ def test_the_field_inside_a_wedge_is_its_walls_spacing(degrees):
     assert np.all(field(axis) <= (q - 1) * d * (1 + 1e-5))
 
 
+@pytest.mark.parametrize("tips", [(1.1, 0.46), (3.0, 1.0), (8.5, 1.1)])
+def test_a_wall_graded_from_two_unlike_corners_has_no_jump_where_they_meet(tips):
+    """A sliver triangle whose long wall runs between corners of two different
+    sharp angles (the third corner nearly straight): the strip is widest
+    where the two wedges meet, so the two progressions must meet there too,
+    their spacings alike.  Each piece of that wall but the corners' own is at
+    most twice its neighbours (the ratios q are 1.008-1.16; the gap left
+    between the two progressions is one piece the field cuts, at worst some
+    0.6 of theirs).  Split at the middle instead, the blunter corner's
+    spacing there was 2.4-4.6 times the sharper one's."""
+    a, b = (math.radians(t) for t in tips)
+    far = 3.5 * math.sin(a) / math.sin(a + b)  # from the first corner to the third
+    loops = [np.array([(0.0, 0.0), (3.5, 0.0), (3.5 - far * math.cos(b), far * math.sin(b))])]
+    # h above the spacing where they meet: both progressions run to it
+    result = refine_boundary(loops, 0.1, sharp_angle=GRADE_ANGLE)
+    check_refinement([np.asarray(loops[0])], result)
+    loop = result.loops[0]
+    wall = loop[:result.input_index[0][1] + 1]  # (0, 0) -> (3.5, 0)
+    pieces = np.diff(wall[:, 0])[1:-1]  # less the corners' own legs, r
+    assert len(pieces) > 20 and np.all(pieces > 0)
+    assert np.max(np.maximum(pieces[1:] / pieces[:-1], pieces[:-1] / pieces[1:])) <= 2.0
+
+
 def test_short_walls_each_get_their_first_node():
     # walls cut at 0.1 by the input next to a 36-degree corner, h = 0.05: the
     # half-step wall's first node must fit in its first half too, so r shrinks
