@@ -182,8 +182,8 @@ def test_a_wall_graded_from_two_unlike_corners_has_no_jump_where_they_meet(tips)
     their spacings alike.  Each piece of that wall but the corners' own is at
     most twice its neighbours (the ratios q are 1.008-1.16; the gap left
     between the two progressions is one piece the field cuts, at worst some
-    0.6 of theirs).  Split at the middle instead, the blunter corner's
-    spacing there was 2.4-4.6 times the sharper one's."""
+    0.6 of theirs).  Split at the middle instead, neighbouring pieces
+    differed by 2.4-4.6 times where the progressions met."""
     a, b = (math.radians(t) for t in tips)
     far = 3.5 * math.sin(a) / math.sin(a + b)  # from the first corner to the third
     loops = [np.array([(0.0, 0.0), (3.5, 0.0), (3.5 - far * math.cos(b), far * math.sin(b))])]
